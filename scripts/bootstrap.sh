@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# Prepare everything ontodetect needs on a fresh machine: the system library Open3D loads
+# (libusb-1.0), a virtual environment in .venv, and the package with its dev extras.
+# Safe to run again: it only reinstalls when pyproject.toml has changed.
+set -euo pipefail
+here=$(cd "$(dirname "$0")/.." && pwd)
+cd "$here"
+PYTHON=${PYTHON:-python3}
+VENV=${VENV:-.venv}
+
+say() { printf '[setup] %s\n' "$*" >&2; }
+
+# 1. libusb-1.0: Open3D's Python module links against it even in the CPU build.
+if [ "$(uname -s)" = "Linux" ] && ! ldconfig -p 2>/dev/null | grep -q 'libusb-1\.0\.so\.0'; then
+    if [ "$(id -u)" = "0" ] && command -v apt-get >/dev/null 2>&1; then
+        say "installing libusb-1.0-0 with apt-get (Open3D needs it)"
+        export DEBIAN_FRONTEND=noninteractive
+        apt-get update -qq >/dev/null
+        apt-get install -y -qq libusb-1.0-0 >/dev/null
+    else
+        say "Open3D needs the system library libusb-1.0, which is missing."
+        say "Install it first, e.g.: sudo apt-get install libusb-1.0-0 (Debian/Ubuntu)"
+        say "                    or: sudo dnf install libusbx (Fedora)"
+        exit 1
+    fi
+fi
+
+# 2. The virtual environment.
+if [ ! -x "$VENV/bin/python" ]; then
+    say "creating virtual environment in $VENV"
+    "$PYTHON" -m venv "$VENV"
+fi
+
+# 3. The package and its development tools, reinstalled only when the metadata changed.
+stamp="$VENV/.ontodetect-installed"
+want=$(sha256sum pyproject.toml | cut -d' ' -f1)
+if [ ! -f "$stamp" ] || [ "$(cat "$stamp")" != "$want" ]; then
+    say "installing ontodetect and its dependencies into $VENV"
+    "$VENV/bin/python" -m pip install -q --disable-pip-version-check --upgrade pip
+    "$VENV/bin/python" -m pip install -q --disable-pip-version-check -e ".[dev]"
+    echo "$want" > "$stamp"
+fi
+"$VENV/bin/python" -c "import open3d, ontodetect" >/dev/null
+say "ready: $VENV/bin/ontodetect"

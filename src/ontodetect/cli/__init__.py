@@ -1,0 +1,89 @@
+"""Command-line interface: ``ontodetect COMMAND ...``.
+
+Each command is a thin layer over a public function of the library; this
+package only parses arguments, shows progress and prints results. Any
+:class:`~ontodetect.errors.OntoDetectError` becomes one line on stderr and exit
+status 2.
+"""
+
+from __future__ import annotations
+
+import sys
+import warnings
+
+import typer
+
+from ..errors import OntoDetectError
+from ._console import console, err_console, setup_output
+
+__all__ = ["app", "main"]
+
+app = typer.Typer(
+    name="ontodetect",
+    help="Find furniture in 3D point clouds of indoor scenes with probabilistic ontological "
+    "priors: no training data, a CPU, and rules you can read and edit.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+    context_settings={"help_option_names": ["-h", "--help"]},
+)
+
+
+@app.callback()
+def _global_options(
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="Print only results and errors."),
+    verbose: bool = typer.Option(False, "--verbose", "-v", help="Print more detail."),
+) -> None:
+    setup_output(quiet=quiet, verbose=verbose)
+
+
+def _register_commands() -> None:
+    # Importing a command module registers its command(s) on ``app``; command modules
+    # arrive with the stages they expose.
+    from importlib import import_module
+
+    for name in ("info", "demo", "synth", "segment", "detect", "evaluate", "cad"):
+        try:
+            import_module(f"{__name__}.{name}")
+        except ModuleNotFoundError as exc:
+            if exc.name != f"{__name__}.{name}":
+                raise
+
+
+_register_commands()
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the CLI; returns the exit status instead of raising ``SystemExit``."""
+    def _show_warning(message, category, filename, lineno, file=None, line=None):
+        err_console.print(f"[yellow]warning:[/] {message}", highlight=False)
+
+    old_show = warnings.showwarning
+    warnings.showwarning = _show_warning
+    try:
+        app(args=argv, prog_name="ontodetect", standalone_mode=False)
+    except OntoDetectError as exc:
+        err_console.print(f"[red]error:[/] {exc}", highlight=False, soft_wrap=True)
+        return 2
+    except typer.Exit as exc:
+        return int(exc.exit_code or 0)
+    except typer.Abort:
+        err_console.print("[red]aborted[/]")
+        return 130
+    except KeyboardInterrupt:
+        err_console.print("[red]interrupted[/]")
+        return 130
+    except Exception as exc:  # usage errors from the argument parser
+        show = getattr(exc, "show", None)
+        code = getattr(exc, "exit_code", None)
+        if callable(show) and isinstance(code, int):
+            show(file=sys.stderr)
+            return code
+        raise
+    finally:
+        warnings.showwarning = old_show
+    return 0
+
+
+def _entry() -> None:  # pragma: no cover - console script
+    sys.exit(main())

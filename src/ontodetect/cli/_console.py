@@ -1,0 +1,71 @@
+"""Consoles, verbosity and the Rich progress reporter the CLI installs."""
+
+from __future__ import annotations
+
+from rich.console import Console
+from rich.progress import (
+    BarColumn,
+    Progress,
+    TaskProgressColumn,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
+
+from .._progress import use_reporter
+
+__all__ = ["RichReporter", "console", "err_console", "reporting", "setup_output", "state"]
+
+console = Console(highlight=False)
+err_console = Console(stderr=True, highlight=False)
+
+
+class _State:
+    quiet: bool = False
+    verbose: bool = False
+
+
+state = _State()
+
+
+def setup_output(*, quiet: bool, verbose: bool) -> None:
+    state.quiet = quiet
+    state.verbose = verbose and not quiet
+
+
+class RichReporter:
+    """Shows library progress as Rich bars on stderr."""
+
+    def __init__(self) -> None:
+        self._progress = Progress(
+            TextColumn("[progress.description]{task.description}"),
+            BarColumn(),
+            TaskProgressColumn(),
+            TimeElapsedColumn(),
+            TimeRemainingColumn(),
+            console=err_console,
+            transient=True,
+        )
+        self._open = 0
+
+    def start(self, description: str, total: float | None) -> object:
+        if self._open == 0:
+            self._progress.start()
+        self._open += 1
+        return self._progress.add_task(description, total=total)
+
+    def advance(self, task: object, amount: float) -> None:
+        self._progress.advance(task, amount)  # type: ignore[arg-type]
+
+    def finish(self, task: object) -> None:
+        self._progress.remove_task(task)  # type: ignore[arg-type]
+        self._open -= 1
+        if self._open == 0:
+            self._progress.stop()
+
+
+def reporting():
+    """Context manager: progress bars on unless ``--quiet`` (or stderr is not a terminal)."""
+    if state.quiet or not err_console.is_terminal:
+        return use_reporter(None)
+    return use_reporter(RichReporter())

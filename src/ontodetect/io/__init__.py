@@ -1,0 +1,238 @@
+"""Reading and writing point clouds and labelled scans.
+
+Every format has one reader (and some a writer) registered in :data:`READERS`
+and :data:`WRITERS`; :func:`read_cloud` and :func:`write_cloud` dispatch by the
+file's extension, its name pattern (``*_vert.npy``, ``scanNNN.3d``), the layout
+of a folder (ScanNet, S3DIS), or an explicit ``format=``. Modules are imported
+only when their format is used, so optional heavy libraries (laspy) cost nothing
+otherwise.
+
+Readers return a :class:`~ontodetect.cloud.PointCloud`; on any problem with the
+file they raise a :class:`~ontodetect.errors.ReadError` subclass whose message
+names the file and the problem.
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from ..cloud import PointCloud
+from ..errors import ReadError, UnsupportedFormatError, WriteError
+from ._atomic import atomic_write, atomic_write_bytes, atomic_write_text
+
+__all__ = [
+    "FORMATS",
+    "READERS",
+    "WRITERS",
+    "FormatInfo",
+    "atomic_write",
+    "atomic_write_bytes",
+    "atomic_write_text",
+    "detect_format",
+    "read_cloud",
+    "supported_formats",
+    "write_cloud",
+]
+
+
+@dataclass(frozen=True)
+class FormatInfo:
+    """One registered format: where its reader and writer live and what it is."""
+
+    name: str
+    module: str
+    reader: str | None
+    writer: str | None
+    extensions: tuple[str, ...]
+    description: str
+
+
+#: Every format ontodetect knows, by name.
+FORMATS: dict[str, FormatInfo] = {
+    f.name: f
+    for f in [
+        FormatInfo("ply", "_ply", "read_ply", "write_ply", (".ply",),
+                   "Stanford PLY, ascii or binary; mesh vertices are points"),
+        FormatInfo("pcd", "_pcd", "read_pcd", "write_pcd", (".pcd",),
+                   "PCL point cloud data: ascii, binary, binary_compressed"),
+        FormatInfo("text", "_text", "read_text", "write_text", (".xyz", ".txt", ".csv", ".pts"),
+                   "columns x y z [r g b] [extra], whitespace or comma separated"),
+        FormatInfo("npy", "_numpy", "read_npy", "write_npy", (".npy",),
+                   "NumPy array (n, 3) xyz or (n, 6) xyz rgb"),
+        FormatInfo("npz", "_numpy", "read_npz", "write_npz", (".npz",),
+                   "NumPy archive with xyz (or points) and optional rgb, normals, fields"),
+        FormatInfo("las", "_las", "read_las", "write_las", (".las", ".laz"),
+                   "ASPRS LAS / LAZ lidar files"),
+        FormatInfo("3dtk", "_threedtk", "read_3dtk", None, (".3d",),
+                   "3DTK scan (scanNNN.3d + scanNNN.pose), cm, left-handed y-up"),
+        FormatInfo("scannet", "_scannet", "read_scannet", None, (),
+                   "ScanNet release scan: *_vh_clean_2.ply + aggregation + segs + label tsv"),
+        FormatInfo("scannet-votenet", "_scannet", "read_scannet_votenet", None, ("_vert.npy",),
+                   "ScanNet as preprocessed for VoteNet: *_vert.npy, *_sem_label.npy, "
+                   "*_ins_label.npy"),
+        FormatInfo("s3dis", "_s3dis", "read_s3dis", None, (),
+                   "S3DIS room folder with Annotations/<class>_<k>.txt"),
+    ]
+}
+
+
+def _load(info: FormatInfo, attr: str | None, path: Path, what: str) -> Callable[..., Any]:
+    if attr is None:
+        raise UnsupportedFormatError(
+            path, f"format {info.name!r} cannot be {what}",
+            [f.name for f in FORMATS.values() if (f.writer if what == "written" else f.reader)],
+        )
+    module = importlib.import_module(f"{__name__}.{info.module}")
+    return getattr(module, attr)
+
+
+class _Registry(dict):
+    """Name -> callable, importing the implementing module on first use."""
+
+    def __init__(self, attr: str) -> None:
+        super().__init__()
+        self._attr = attr
+
+    def __missing__(self, name: str) -> Callable[..., Any]:
+        info = FORMATS.get(name)
+        if info is None or getattr(info, self._attr) is None:
+            raise KeyError(name)
+        fn = _load(info, getattr(info, self._attr), Path(name), "read")
+        self[name] = fn
+        return fn
+
+    def __contains__(self, name: object) -> bool:
+        info = FORMATS.get(name)  # type: ignore[arg-type]
+        return info is not None and getattr(info, self._attr) is not None
+
+    def keys(self):  # type: ignore[override]
+        return [n for n in FORMATS if n in self]
+
+
+#: Format name -> reader ``fn(path, **options) -> PointCloud``.
+READERS: dict[str, Callable[..., PointCloud]] = _Registry("reader")
+#: Format name -> writer ``fn(path, cloud, **options) -> Path``.
+WRITERS: dict[str, Callable[..., Path]] = _Registry("writer")
+
+
+def supported_formats(kind: str = "read") -> list[str]:
+    """Names of the formats that can be read (``kind="read"``) or written (``"write"``)."""
+    attr = "reader" if kind == "read" else "writer"
+    return [n for n, f in FORMATS.items() if getattr(f, attr) is not None]
+
+
+def detect_format(path: str | os.PathLike[str]) -> str:
+    """Guess a file's or folder's format from its name and, for folders, its layout.
+
+    Examples
+    --------
+    >>> detect_format("room/scene0000_00_vert.npy")
+    'scannet-votenet'
+    >>> detect_format("scan.laz")
+    'las'
+    """
+    p = Path(path)
+    name = p.name.lower()
+    if p.is_dir():
+        if (p / "Annotations").is_dir():
+            return "s3dis"
+        if any(p.glob("*_vh_clean_2.ply")):
+            return "scannet"
+        if any(p.glob("*.3d")):
+            return "3dtk"
+        raise UnsupportedFormatError(
+            p, "is a folder that is neither a ScanNet scan, an S3DIS room nor a 3DTK scan "
+            "folder", supported_formats(),
+        )
+    if name.endswith(("_vert.npy", "_sem_label.npy", "_ins_label.npy")):
+        return "scannet-votenet"
+    if name.endswith("_vh_clean_2.ply") and any(p.parent.glob("*.aggregation.json")):
+        return "scannet"
+    suffix = p.suffix.lower()
+    for info in FORMATS.values():
+        if suffix and suffix in info.extensions:
+            return info.name
+    raise UnsupportedFormatError(
+        p, f"unknown file extension {p.suffix or '(none)'!r}", supported_formats()
+    )
+
+
+def read_cloud(
+    path: str | os.PathLike[str], format: str | None = None, **options: Any
+) -> PointCloud:
+    """Read a point cloud or labelled scan.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        A file, or a folder for the ScanNet, S3DIS and 3DTK layouts.
+    format : str, optional
+        One of :func:`supported_formats`; guessed from ``path`` when omitted.
+    **options
+        Passed to the format's reader.
+
+    Returns
+    -------
+    PointCloud
+        With ``meta["source"]`` and ``meta["format"]`` set.
+
+    Raises
+    ------
+    ReadError
+        The file is missing, unreadable, corrupt, or of an unsupported format.
+    """
+    p = Path(path)
+    if not p.exists():
+        raise ReadError(p, "no such file or folder")
+    fmt = format.lower() if format else detect_format(p)
+    if fmt not in FORMATS or FORMATS[fmt].reader is None:
+        raise UnsupportedFormatError(p, f"unknown format {format!r}", supported_formats())
+    if p.is_dir() and fmt not in ("scannet", "s3dis", "3dtk"):
+        raise ReadError(p, f"is a folder, but format {fmt!r} reads a single file")
+    if p.is_file() and not os.access(p, os.R_OK):
+        raise ReadError(p, "permission denied")
+    cloud = READERS[fmt](p, **options)
+    meta = {"source": str(p), "format": fmt}
+    meta.update({k: v for k, v in cloud.meta.items() if k not in meta})
+    return cloud.with_meta(**meta)
+
+
+def write_cloud(
+    path: str | os.PathLike[str], cloud: PointCloud, format: str | None = None, **options: Any
+) -> Path:
+    """Write a point cloud atomically (temporary file, then rename).
+
+    Parameters
+    ----------
+    path : str or PathLike
+        Target file; its extension chooses the format unless ``format`` is given.
+    cloud : PointCloud
+        What to write: points, colours, normals and every extra field the format
+        can carry.
+    format : str, optional
+        One of ``supported_formats("write")``.
+
+    Returns
+    -------
+    Path
+        The written file.
+    """
+    p = Path(path)
+    if not isinstance(cloud, PointCloud):
+        raise WriteError(p, f"expected a PointCloud, got {type(cloud).__name__}")
+    try:
+        fmt = format.lower() if format else detect_format(p)
+    except UnsupportedFormatError as exc:
+        raise UnsupportedFormatError(
+            p, f"cannot choose a writer for extension {p.suffix or '(none)'!r}",
+            supported_formats("write"),
+        ) from exc
+    if fmt not in WRITERS:
+        raise UnsupportedFormatError(p, f"format {fmt!r} cannot be written",
+                                     supported_formats("write"))
+    return WRITERS[fmt](p, cloud, **options)

@@ -1,0 +1,197 @@
+"""What a point cloud looks like at a glance: size, fields, spacing, units and up axis.
+
+:func:`describe_cloud` is what ``ontodetect info`` prints. The guesses are
+heuristics a person would make looking at the numbers: indoor rooms are a few
+metres across (so a cloud tens of thousands of units wide is in millimetres),
+and the up axis is the one along which the most points sit on a few large
+horizontal planes (floor, ceiling, table tops).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .cloud import PointCloud
+
+__all__ = ["CloudSummary", "describe_cloud", "estimate_spacing", "guess_units", "guess_up_axis"]
+
+#: Points sampled for spacing and up-axis estimates; enough for a stable median.
+SAMPLE_SIZE = 20_000
+#: A room-scale scene measured in metres is at most this wide (a building floor).
+MAX_METRIC_EXTENT = 500.0
+
+
+@dataclass(frozen=True)
+class CloudSummary:
+    """Facts and guesses about one cloud, as ``ontodetect info`` shows them."""
+
+    source: str | None
+    format: str | None
+    num_points: int
+    fields: list[str]
+    has_colors: bool
+    has_normals: bool
+    bounds_min: list[float]
+    bounds_max: list[float]
+    extent: list[float]
+    spacing: float
+    density: float
+    units: str
+    up_axis: str
+    up_confidence: float
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain JSON-ready dictionary."""
+        return asdict(self)
+
+
+def _sample(xyz: np.ndarray, size: int, seed: int) -> np.ndarray:
+    if len(xyz) <= size:
+        return xyz
+    rng = np.random.default_rng(seed)
+    return xyz[rng.choice(len(xyz), size, replace=False)]
+
+
+def estimate_spacing(xyz: np.ndarray, *, sample: int = SAMPLE_SIZE, seed: int = 0) -> float:
+    """Median distance from a point to its nearest neighbour.
+
+    Parameters
+    ----------
+    xyz : (n, 3) float
+        Points.
+    sample : int
+        At most this many points are queried (against all points).
+    seed : int
+        Seed of the sample.
+
+    Returns
+    -------
+    float
+        The median nearest-neighbour distance (0 for fewer than 2 points).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> g = np.stack(np.meshgrid(np.arange(10), np.arange(10), [0]), -1).reshape(-1, 3)
+    >>> float(estimate_spacing(g * 0.02))
+    0.02
+    """
+    xyz = np.asarray(xyz, dtype=np.float64)
+    if len(xyz) < 2:
+        return 0.0
+    tree = cKDTree(xyz)
+    query = _sample(xyz, sample, seed)
+    dist, _ = tree.query(query, k=2, workers=-1)
+    d = dist[:, 1]
+    d = d[d > 0]
+    return float(np.median(d)) if d.size else 0.0
+
+
+def guess_units(xyz: np.ndarray, spacing: float | None = None) -> str:
+    """"metres" or "millimetres" (or "unknown"), from the size of the scene.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> guess_units(np.array([[0, 0, 0], [4000.0, 3000, 2500]]))
+    'millimetres'
+    """
+    xyz = np.asarray(xyz, dtype=np.float64)
+    if len(xyz) < 2:
+        return "unknown"
+    extent = float(np.max(np.ptp(xyz, axis=0)))
+    if extent > MAX_METRIC_EXTENT:
+        return "millimetres"
+    if spacing is not None and spacing > 5.0:
+        return "millimetres"
+    return "metres"
+
+
+def guess_up_axis(
+    xyz: np.ndarray, *, sample: int = SAMPLE_SIZE, seed: int = 0
+) -> tuple[str, float]:
+    """Which signed axis points up, and how sure the guess is (0..1).
+
+    Indoors, the floor, ceiling and table tops are large planes perpendicular to
+    the up axis, so coordinates along that axis pile up in a few histogram bins.
+    The sign says where the floor is: most points lie above it, and the floor
+    holds more points than the ceiling in a scan.
+
+    Returns
+    -------
+    axis : str
+        One of ``"+x" "-x" "+y" "-y" "+z" "-z"``.
+    confidence : float
+        Share of the best axis's concentration score among the three.
+    """
+    xyz = np.asarray(xyz, dtype=np.float64)
+    if len(xyz) < 10:
+        return "+z", 0.0
+    pts = _sample(xyz, sample, seed)
+    scores = []
+    for a in range(3):
+        c = pts[:, a]
+        span = float(np.ptp(c))
+        if span <= 0:
+            scores.append(0.0)
+            continue
+        bins = max(10, int(span / 0.02)) if span < 100 else 200
+        hist, _ = np.histogram(c, bins=min(bins, 2000))
+        top = np.sort(hist)[::-1][: max(2, len(hist) // 50)]
+        scores.append(float(top.sum()) / len(c))
+    scores_arr = np.asarray(scores)
+    axis = int(np.argmax(scores_arr))
+    conf = float(scores_arr[axis] / scores_arr.sum()) if scores_arr.sum() > 0 else 0.0
+    c = pts[:, axis]
+    lo, hi = np.percentile(c, [2, 98])
+    # The floor side holds more points in its lowest tenth than the ceiling side.
+    band = (hi - lo) * 0.1
+    n_low = int(np.count_nonzero(c < lo + band))
+    n_high = int(np.count_nonzero(c > hi - band))
+    sign = "+" if n_low >= n_high else "-"
+    return f"{sign}{'xyz'[axis]}", conf
+
+
+def describe_cloud(cloud: PointCloud, *, seed: int = 0) -> CloudSummary:
+    """Summarize a cloud for people and scripts.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from ontodetect import point_cloud
+    >>> s = describe_cloud(point_cloud(np.random.default_rng(0).random((500, 3)) * 3))
+    >>> s.num_points, s.units
+    (500, 'metres')
+    """
+    xyz = cloud.xyz
+    n = len(cloud)
+    lo = xyz.min(axis=0) if n else np.zeros(3)
+    hi = xyz.max(axis=0) if n else np.zeros(3)
+    spacing = estimate_spacing(xyz, seed=seed)
+    ext = hi - lo
+    # Points per square metre of surface: one point per spacing² cell.
+    density = 1.0 / spacing**2 if spacing > 0 else 0.0
+    up, conf = guess_up_axis(xyz, seed=seed)
+    extra = {k: v for k, v in cloud.meta.items() if k not in ("source", "format")}
+    return CloudSummary(
+        source=cloud.meta.get("source"),
+        format=cloud.meta.get("format"),
+        num_points=n,
+        fields=list(cloud.fields),
+        has_colors=cloud.has_colors,
+        has_normals=cloud.has_normals,
+        bounds_min=[float(v) for v in lo],
+        bounds_max=[float(v) for v in hi],
+        extent=[float(v) for v in ext],
+        spacing=spacing,
+        density=density,
+        units=guess_units(xyz, spacing),
+        up_axis=up,
+        up_confidence=conf,
+        extra={k: v for k, v in extra.items() if isinstance(v, (str, int, float, bool, list))},
+    )
