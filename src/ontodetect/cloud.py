@@ -181,11 +181,11 @@ class PointCloud:
         """The cloud as an ``open3d.geometry.PointCloud`` (colours scaled to 0..1)."""
         import open3d as o3d
 
-        pc = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(np.ascontiguousarray(self.xyz)))
+        pc = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(np.array(self.xyz)))
         if self.rgb is not None:
             pc.colors = o3d.utility.Vector3dVector(self.rgb.astype(np.float64) / 255.0)
         if self.normals is not None:
-            pc.normals = o3d.utility.Vector3dVector(np.ascontiguousarray(self.normals))
+            pc.normals = o3d.utility.Vector3dVector(np.array(self.normals))
         return pc
 
 

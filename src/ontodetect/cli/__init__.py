@@ -14,7 +14,7 @@ import warnings
 import typer
 
 from ..errors import OntoDetectError
-from ._console import console, err_console, setup_output
+from ._console import err_console, setup_output
 
 __all__ = ["app", "main"]
 
