@@ -1,0 +1,295 @@
+"""Scoring a cluster against every class of an ontology (thesis Eq. 3.1–3.3, Alg. 1 steps 10–18).
+
+For each class the cluster's planes are assigned to the class's parts (each
+plane to at most one part, a part possibly left without a plane when it is
+occluded); the assignment with the highest likelihood
+
+    P_ont|obj = Π_parts P_def,   P_def = P_Pr · P_Or · P_De · P_He      (Eq. 3.2, 3.3)
+
+is kept. A part without a plane contributes its ``missing`` factor instead:
+occlusion is penalised, not fatal. Relations between two parts count towards
+``P_Pr`` of the second part named. Cluster-wide rules (extent, number of planes)
+multiply in as one more factor. The posterior over the classes and a "none"
+hypothesis is then
+
+    P_obj|ont ∝ P_obj · P_ont|obj                                        (Eq. 3.1)
+
+computed in log space and normalised, so that a cluster matching no class well
+puts its mass on "none".
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ._gaussian import Gaussian
+from ._schema import PART_FEATURES, ObjectClass, Ontology
+
+__all__ = [
+    "ClassScore",
+    "ClusterDescription",
+    "ClusterScores",
+    "ConstraintValue",
+    "plane_feature",
+    "score_class",
+    "score_cluster",
+]
+
+#: Parts consider at most this many candidate planes (best unary scores first).
+MAX_CANDIDATES = 6
+#: Planes whose unary log-score is below this are not worth assigning (factor < 1e-9).
+MIN_LOG_UNARY = math.log(1e-9)
+#: Name of the hypothesis that the cluster is none of the classes.
+NONE = "none"
+
+
+@dataclass(frozen=True)
+class ClusterDescription:
+    """What the scoring needs to know about a cluster.
+
+    Attributes
+    ----------
+    planes : sequence of plane objects
+        Each with the attributes ``tilt``, ``height``, ``z_min``, ``z_max``, ``length``,
+        ``width``, ``area``, ``density``, ``num_points``, ``normal``, ``centroid``
+        (``ontodetect.segment.planes.Plane`` has them).
+    relations : mapping of (i, j) to relation objects, i < j
+        Each with ``angle``, ``distance`` and ``xy_overlap``.
+    length, breadth, height, bottom : float
+        Longest and shortest horizontal side of the upright box, top and lowest
+        point above the floor (m).
+    """
+
+    planes: Sequence[Any]
+    relations: Mapping[tuple[int, int], Any]
+    length: float
+    breadth: float
+    height: float
+    bottom: float
+
+
+@dataclass(frozen=True)
+class ConstraintValue:
+    """One evaluated constraint: where it applies, the measured value, its Gaussian, its factor."""
+
+    part: str  # part name, "a~b" for a relation, "cluster" for cluster rules
+    feature: str
+    group: str  # Or, He, De, Pr, or "cluster"
+    value: float | None  # None when the part is missing
+    gaussian: Gaussian | None
+    factor: float
+
+
+@dataclass(frozen=True)
+class ClassScore:
+    """The best interpretation of a cluster as one class."""
+
+    name: str
+    log_likelihood: float  # log P_ont|obj
+    log_prior: float  # log P_obj
+    assignment: Mapping[str, int | None]  # part -> plane index or None (missing)
+    factors: Mapping[str, Mapping[str, float]]  # part -> {"Or", "He", "De", "Pr", "def"}
+    constraints: tuple[ConstraintValue, ...]
+    probability: float = 0.0  # P_obj|ont after normalisation (set by score_cluster)
+
+    @property
+    def likelihood(self) -> float:
+        return math.exp(self.log_likelihood)
+
+
+@dataclass(frozen=True)
+class ClusterScores:
+    """Scores of one cluster for every class, plus "none"."""
+
+    classes: Mapping[str, ClassScore]
+    probabilities: Mapping[str, float]  # class -> P_obj|ont; includes "none"
+    best: str  # most probable class (may be "none")
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def best_probability(self) -> float:
+        return self.probabilities[self.best]
+
+
+def plane_feature(plane: Any, feature: str) -> float:
+    """The value of a part feature (see ``PART_FEATURES``) for one plane."""
+    if feature == "top":
+        return float(plane.z_max)
+    if feature == "bottom":
+        return float(plane.z_min)
+    if feature == "fill":
+        box = float(plane.length) * float(plane.width)
+        return float(plane.area) / box if box > 0 else 0.0
+    if feature == "points":
+        return float(plane.num_points)
+    return float(getattr(plane, feature))
+
+
+def _relation_feature(desc: ClusterDescription, i: int, j: int, feature: str) -> float:
+    if feature == "gap":
+        return float(desc.planes[j].centroid[2] - desc.planes[i].centroid[2])
+    rel = desc.relations.get((min(i, j), max(i, j)))
+    if rel is None:
+        return math.inf if feature == "distance" else 0.0
+    if feature == "overlap":
+        return float(rel.xy_overlap)
+    return float(getattr(rel, feature))
+
+
+def _cluster_feature(desc: ClusterDescription, feature: str) -> float:
+    if feature == "planes":
+        return float(len(desc.planes))
+    return float(getattr(desc, feature))
+
+
+def _unary(cls: ObjectClass, desc: ClusterDescription) -> np.ndarray:
+    """(parts, planes) log-factor of each plane as each part, relations left out."""
+    out = np.zeros((len(cls.parts), len(desc.planes)))
+    for p, part in enumerate(cls.parts):
+        for feature, g in part.constraints.items():
+            values = np.array([plane_feature(pl, feature) for pl in desc.planes])
+            out[p] += g.log(values) if len(values) else 0.0
+    return out
+
+
+def score_class(cls: ObjectClass, desc: ClusterDescription, log_prior: float = 0.0) -> ClassScore:
+    """Find the most likely assignment of planes to the class's parts and its likelihood."""
+    unary = _unary(cls, desc)
+    part_index = {p.name: k for k, p in enumerate(cls.parts)}
+    candidates: list[list[int | None]] = []
+    for p, part in enumerate(cls.parts):
+        order = np.argsort(-unary[p], kind="stable")[:MAX_CANDIDATES]
+        cand: list[int | None] = [int(i) for i in order if unary[p, i] > MIN_LOG_UNARY]
+        candidates.append([*cand, None])
+        del part
+    rel_terms = [(part_index[r.a], part_index[r.b], r) for r in cls.relations]
+
+    # Planes no part explains cost ``extra_plane`` each: a stool is not a chair with a back.
+    log_extra = math.log(cls.extra_plane)
+    best_log, best_assign = -math.inf, None
+    for combo in itertools.product(*candidates):
+        used = [c for c in combo if c is not None]
+        if len(used) != len(set(used)):
+            continue
+        total = (len(desc.planes) - len(used)) * log_extra
+        for p, c in enumerate(combo):
+            total += unary[p, c] if c is not None else math.log(cls.parts[p].missing)
+        if total <= best_log:
+            continue  # relation factors are <= 1: this cannot win
+        for a, b, rel in rel_terms:
+            ia, ib = combo[a], combo[b]
+            if ia is None or ib is None:
+                continue
+            for feature, g in rel.constraints.items():
+                total += float(g.log(_relation_feature(desc, ia, ib, feature)))
+        if total > best_log:
+            best_log, best_assign = total, combo
+    assert best_assign is not None  # the all-missing combination always exists
+
+    constraints: list[ConstraintValue] = []
+    factors: dict[str, dict[str, float]] = {}
+    for p, part in enumerate(cls.parts):
+        plane = best_assign[p]
+        groups = {"Or": 1.0, "He": 1.0, "De": 1.0, "Pr": 1.0}
+        if plane is None:
+            groups["missing"] = part.missing
+            constraints.append(ConstraintValue(part.name, "missing", "De", None, None,
+                                               part.missing))
+        else:
+            for feature, g in part.constraints.items():
+                value = plane_feature(desc.planes[plane], feature)
+                f = float(g(value))
+                groups[PART_FEATURES[feature]] *= f
+                constraints.append(ConstraintValue(part.name, feature, PART_FEATURES[feature],
+                                                   value, g, f))
+        factors[part.name] = groups
+    for a, b, rel in rel_terms:
+        ia, ib = best_assign[a], best_assign[b]
+        if ia is None or ib is None:
+            continue
+        name = f"{rel.a}~{rel.b}"
+        for feature, g in rel.constraints.items():
+            value = _relation_feature(desc, ia, ib, feature)
+            f = float(g(value))
+            factors[rel.b]["Pr"] *= f
+            constraints.append(ConstraintValue(name, feature, "Pr", value, g, f))
+    cluster_log = 0.0
+    cluster_factor = 1.0
+    unexplained = len(desc.planes) - sum(c is not None for c in best_assign)
+    if cls.extra_plane < 1.0 and unexplained:
+        f = cls.extra_plane**unexplained
+        cluster_factor *= f
+        constraints.append(ConstraintValue("cluster", "extra_plane", "cluster",
+                                           float(unexplained), None, f))
+    for feature, g in cls.cluster.constraints.items():
+        value = _cluster_feature(desc, feature)
+        f = float(g(value))
+        cluster_log += float(g.log(value))
+        cluster_factor *= f
+        constraints.append(ConstraintValue("cluster", feature, "cluster", value, g, f))
+    for groups in factors.values():
+        groups["def"] = math.prod(groups.values())
+    factors["cluster"] = {"def": cluster_factor}
+    assignment = {part.name: best_assign[p] for p, part in enumerate(cls.parts)}
+    return ClassScore(
+        # best_log already holds the extra-plane penalty; the cluster rules come on top.
+        name=cls.name, log_likelihood=best_log + cluster_log, log_prior=log_prior,
+        assignment=assignment, factors=factors, constraints=tuple(constraints),
+    )
+
+
+def score_cluster(
+    desc: ClusterDescription,
+    ontology: Ontology,
+    priors: Mapping[str, float] | None = None,
+    *,
+    none_likelihood: float = 0.05,
+    none_prior: float = 1.0,
+) -> ClusterScores:
+    """Score a cluster against every class and normalise over the classes and "none".
+
+    Parameters
+    ----------
+    desc : ClusterDescription
+        The cluster's planes, relations and extent.
+    ontology : Ontology
+        The classes.
+    priors : mapping of class name to P_obj, optional
+        Environment priors (Eq. 3.5, 3.10); 1 for classes not given.
+    none_likelihood : float
+        Likelihood of the features under "none of the classes": a class must
+        explain the cluster better than this to take most of the probability.
+    none_prior : float
+        Prior weight of "none".
+
+    Returns
+    -------
+    ClusterScores
+    """
+    priors = priors or {}
+    scores = {}
+    logs = {}
+    for cls in ontology.classes:
+        prior = float(priors.get(cls.name, 1.0))
+        log_prior = math.log(prior) if prior > 0 else -math.inf
+        s = score_class(cls, desc, log_prior)
+        scores[cls.name] = s
+        logs[cls.name] = s.log_likelihood + log_prior
+    logs[NONE] = math.log(none_likelihood) + math.log(none_prior)
+    top = max(logs.values())
+    weights = {k: math.exp(v - top) if v > -math.inf else 0.0 for k, v in logs.items()}
+    z = sum(weights.values())
+    probs = {k: w / z for k, w in weights.items()}
+    scores = {
+        k: ClassScore(s.name, s.log_likelihood, s.log_prior, s.assignment, s.factors,
+                      s.constraints, probs[k])
+        for k, s in scores.items()
+    }
+    best = max(probs, key=lambda k: (probs[k], k != NONE))
+    return ClusterScores(classes=scores, probabilities=probs, best=best)

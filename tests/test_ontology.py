@@ -1,0 +1,200 @@
+"""Ontology scoring on hand-made clusters with known answers."""
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+
+from ontodetect.errors import InvalidOntologyError, InvalidParameterError
+from ontodetect.ontology import (
+    NONE,
+    ClusterDescription,
+    Gaussian,
+    builtin_ontology,
+    class_priors,
+    parse_ontology,
+    room_distribution,
+    score_class,
+    score_cluster,
+)
+
+
+@dataclass(frozen=True)
+class P:  # the plane features the scoring reads
+    tilt: float
+    height: float
+    length: float
+    width: float
+    cx: float = 0.0
+    cy: float = 0.0
+    fill: float = 0.9
+    thickness: float = 0.02
+
+    @property
+    def centroid(self):
+        return np.array([self.cx, self.cy, self.height])
+
+    @property
+    def area(self):
+        return self.fill * self.length * self.width
+
+    @property
+    def z_min(self):
+        return self.height - (self.width / 2 if self.tilt > 45 else self.thickness)
+
+    @property
+    def z_max(self):
+        return self.height + (self.width / 2 if self.tilt > 45 else self.thickness)
+
+    density = 2500.0
+    num_points = 500
+    normal = np.array([0.0, 0.0, 1.0])
+
+
+@dataclass(frozen=True)
+class R:
+    angle: float
+    distance: float
+    xy_overlap: float = 0.0
+
+
+def cluster(planes, relations=None, *, length, breadth=None, height=None):
+    top = max(p.z_max for p in planes)
+    return ClusterDescription(planes=planes, relations=relations or {}, length=length,
+                              breadth=breadth or length * 0.9, height=height or top, bottom=0.0)
+
+
+def chair():
+    seat = P(tilt=2, height=0.46, length=0.45, width=0.42)
+    back = P(tilt=85, height=0.72, length=0.44, width=0.4, cy=0.2)
+    return cluster([seat, back], {(0, 1): R(angle=87, distance=0.02)}, length=0.55)
+
+
+def stool():
+    return cluster([P(tilt=1, height=0.62, length=0.35, width=0.33)], length=0.38)
+
+
+def high_table():
+    return cluster([P(tilt=1, height=0.74, length=1.4, width=0.8)], length=1.45)
+
+
+def sofa():
+    seat = P(tilt=3, height=0.42, length=1.9, width=0.6)
+    back = P(tilt=75, height=0.7, length=1.9, width=0.35, cy=0.35)
+    return cluster([seat, back], {(0, 1): R(angle=78, distance=0.05)}, length=2.1, breadth=0.9)
+
+
+@pytest.mark.parametrize(("make", "expected"), [
+    (chair, "chair"), (stool, "stool"), (high_table, "table"), (sofa, "sofa")])
+def test_hand_made_clusters_get_their_class(make, expected):
+    scores = score_cluster(make(), builtin_ontology())
+    assert scores.best == expected
+    assert scores.probabilities[expected] > 0.5
+    assert math.isclose(sum(scores.probabilities.values()), 1.0)
+
+
+def test_stool_is_not_a_chair_and_table_is_not_a_chair():
+    o = builtin_ontology()
+    assert score_cluster(stool(), o).probabilities["chair"] < 0.2
+    assert score_cluster(high_table(), o).probabilities["chair"] < 0.05
+
+
+def test_chair_assignment_and_factors():
+    s = score_class(builtin_ontology()["chair"], chair())
+    assert s.assignment == {"seat": 0, "backrest": 1}
+    # every factor of P_def is the product of its constraints' Gaussians
+    seat = {c.feature: c for c in s.constraints if c.part == "seat"}
+    g = builtin_ontology()["chair"].part("seat").constraints["height"]
+    assert seat["height"].factor == pytest.approx(math.exp(-0.5 * ((0.46 - 0.55) / 0.2) ** 2))
+    assert seat["height"].gaussian == g
+    he = math.prod(c.factor for c in s.constraints if c.part == "seat" and c.group == "He")
+    assert s.factors["seat"]["He"] == pytest.approx(he)
+    total = math.prod(f["def"] for f in s.factors.values())
+    assert math.log(total) == pytest.approx(s.log_likelihood)
+
+
+def test_occluded_backrest_is_penalised_not_fatal():
+    seat_only = cluster([P(tilt=2, height=0.46, length=0.45, width=0.42)], length=0.5,
+                        height=0.95)
+    s = score_class(builtin_ontology()["chair"], seat_only)
+    assert s.assignment["backrest"] is None
+    assert s.factors["backrest"]["missing"] == pytest.approx(0.12)
+    assert s.likelihood > 0.01
+
+
+def test_each_factor_follows_its_gaussian():
+    text = """
+format: ontodetect.ontology/1
+classes:
+  thing:
+    parts:
+      top: {height: {mean: 0.7, sigma: 0.1}, tilt: {max: 5, soft: 2}, fill: {min: 0.5, soft: 0.1}}
+"""
+    o = parse_ontology(text)
+    for h, tilt, fill in [(0.7, 0, 1.0), (0.8, 0, 1.0), (0.7, 9, 1.0), (0.7, 0, 0.3)]:
+        d = cluster([P(tilt=tilt, height=h, length=1, width=1, fill=fill)], length=1)
+        f = score_class(o["thing"], d).factors["top"]
+        assert f["He"] == pytest.approx(math.exp(-0.5 * ((h - 0.7) / 0.1) ** 2))
+        assert f["Or"] == pytest.approx(math.exp(-0.5 * (max(tilt - 5, 0) / 2) ** 2))
+        assert f["De"] == pytest.approx(math.exp(-0.5 * (min(fill - 0.5, 0) / 0.1) ** 2),
+                                        rel=1e-6)
+
+
+def test_gaussian_forms():
+    g = Gaussian.from_range(0.35, 0.75)
+    assert float(g(0.55)) == 1.0
+    assert float(g(0.75)) == pytest.approx(math.exp(-0.5))
+    assert float(Gaussian.at_least(0.3, 0.1)(0.2)) == pytest.approx(math.exp(-0.5))
+    assert float(Gaussian.at_most(6, 2)(2)) == 1.0
+
+
+def test_environment_prior_follows_eq_3_10():
+    o = builtin_ontology()
+    assert class_priors(o, "living_room")["chair"] == pytest.approx(0.987)
+    mixed = class_priors(o, {"office": 1, "corridor": 1})["chair"]
+    assert mixed == pytest.approx((0.58 + 0.05) / 2)
+    assert class_priors(o)["chair"] == 1.0
+    assert class_priors(o, "office")["table"] == 1.0  # no room table for tables: unknown
+    assert sum(room_distribution("office_scenes").values()) == pytest.approx(1.0)
+    with pytest.raises(InvalidParameterError, match="'room'"):
+        room_distribution("spaceship")
+
+
+def test_prior_lowers_posterior_in_unlikely_rooms():
+    o = builtin_ontology()
+    p_living = score_cluster(chair(), o, class_priors(o, "living_room")).probabilities["chair"]
+    p_corr = score_cluster(chair(), o, class_priors(o, "corridor")).probabilities["chair"]
+    assert p_corr < p_living
+
+
+@pytest.mark.parametrize(("body", "line", "key"), [
+    ("  chair:\n    parts:\n      seat: {height: [0.7, 0.3]}\n", 5,
+     "classes.chair.parts.seat.height"),
+    ("  chair:\n    parts:\n      seat: {colour: [1, 2]}\n", 5, "classes.chair.parts.seat.colour"),
+    ("  chair:\n    parts:\n      seat: {tilt: 3}\n", 5, "classes.chair.parts.seat.tilt"),
+    ("  chair:\n    parts: {seat: {}}\n    relations:\n      - {between: [seat, back]}\n",
+     6, "classes.chair.relations[0].between[1]"),
+    ("  chair:\n    partz: {}\n", 4, "classes.chair.partz"),
+])
+def test_ontology_errors_name_file_line_and_key(tmp_path, body, line, key):
+    f = tmp_path / "my.yaml"
+    f.write_text("format: ontodetect.ontology/1\nclasses:\n" + body)
+    from ontodetect.ontology import read_ontology_file
+
+    with pytest.raises(InvalidOntologyError) as exc:
+        read_ontology_file(f)
+    msg = str(exc.value)
+    assert msg.startswith(f"{f}:{line} [{key}]"), msg
+
+
+def test_bad_yaml_and_wrong_format(tmp_path):
+    with pytest.raises(InvalidOntologyError, match="not valid YAML"):
+        parse_ontology("classes: [", "x.yaml")
+    with pytest.raises(InvalidOntologyError, match="expected format"):
+        parse_ontology("classes: {}", "x.yaml")
+
+
+def test_none_takes_mass_when_nothing_fits():
+    wall = cluster([P(tilt=90, height=1.2, length=3.0, width=2.4)], length=3.0, height=2.4)
+    assert score_cluster(wall, builtin_ontology()).best == NONE
