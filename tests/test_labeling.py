@@ -1,0 +1,85 @@
+"""Energy labelling (Eq. 3.6–3.8) against hand computation."""
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from ontodetect.errors import InvalidParameterError
+from ontodetect.labeling import energy, label_clusters, label_costs, label_fit
+from ontodetect.ontology import ClusterScores, Gaussian, LabelModel, builtin_ontology
+
+
+def scores(**probs):
+    probs = {"chair": 0, "sofa": 0, "table": 0, "stool": 0, "bench": 0, **probs}
+    probs["none"] = max(0.0, 1 - sum(probs.values()))
+    best = max(probs, key=probs.get)
+    return ClusterScores(classes={}, probabilities=probs, best=best)
+
+
+def plane(length, width, color=None):
+    return SimpleNamespace(length=length, width=width, color_mean=color)
+
+
+def test_energy_matches_hand_computation():
+    p, f, beta = 0.604, 0.3, 0.7
+    by_hand = 1 - 0.7 / (1 + math.exp(-0.604)) - 0.3 / (1 + math.exp(-0.3))
+    assert energy(p, f, beta=beta, gamma=0.3) == pytest.approx(by_hand)
+    assert energy(0, 0) == pytest.approx(0.5)
+    with pytest.raises(InvalidParameterError, match="beta \\+ gamma"):
+        energy(0.5, 0.5, beta=0.6, gamma=0.6)
+
+
+def test_label_fit_is_the_product_over_planes():
+    model = LabelModel(color=((100.0, 50.0, 0.0), 40.0), plane_size=Gaussian(0.45, 0.2))
+    planes = [plane(0.45, 0.4, (100, 50, 0)), plane(0.65, 0.3, (140, 50, 0))]
+    by_hand = 1.0 * 1.0 * math.exp(-0.5) * math.exp(-0.5)
+    assert label_fit(planes, model) == pytest.approx(by_hand)
+    assert label_fit(planes, LabelModel()) == 1.0
+
+
+def test_costs_prefer_table_for_a_large_top():
+    o = builtin_ontology()
+    s = scores(chair=0.30, table=0.35)
+    costs = label_costs(s, [plane(1.2, 0.8)], o)
+    assert costs["table"] < costs["chair"]
+    p, f = 0.35, float(o["table"].labeling.plane_size(1.2))
+    assert costs["table"] == pytest.approx(1 - 0.5 / (1 + math.exp(-p)) - 0.5 / (1 + math.exp(-f)))
+
+
+def test_threshold_and_not_reported_classes():
+    o = builtin_ontology()
+    out = label_clusters(
+        [scores(chair=0.1), scores(chair=0.7), scores(stool=0.8)],
+        [[plane(0.4, 0.4)]] * 3, o)
+    assert out[0].label is None and out[0].reason == "none of the classes"
+    assert out[1].label == "chair"
+    assert out[2].label is None and "stool" in out[2].reason
+
+
+def test_exclusion_keeps_the_cheaper_of_two_overlapping_hypotheses():
+    o = builtin_ontology()
+    s = [scores(chair=0.5), scores(chair=0.9)]
+    out = label_clusters(s, [[plane(0.45, 0.4)]] * 2, o, overlaps={(0, 1): 0.4})
+    assert [c.label for c in out] == [None, "chair"]
+    assert out[0].reason == "excluded by an overlap"
+
+
+def test_context_tips_an_ambiguous_seat_towards_chair_near_a_table():
+    o = builtin_ontology()
+    amb = scores(chair=0.40, table=0.40)
+    planes = [[plane(0.9, 0.6)], [plane(1.4, 0.8)]]
+    centers = np.array([[0.0, 0.0, 0.4], [0.5, 0.0, 0.7]])
+    alone = label_clusters([amb, scores(table=0.9)], planes, o)
+    helped = label_clusters([amb, scores(table=0.9)], planes, o, centers=centers, context=0.2)
+    assert alone[0].label == "table"
+    assert helped[0].label == "chair"
+    assert helped[1].label == "table"
+
+
+@pytest.mark.parametrize(("kwargs", "name"), [
+    ({"beta": 1.5}, "beta"), ({"threshold": -0.1}, "threshold"), ({"context": -1}, "context")])
+def test_bad_parameters(kwargs, name):
+    with pytest.raises(InvalidParameterError, match=f"'{name}'"):
+        label_clusters([scores(chair=0.5)], [[plane(0.4, 0.4)]], builtin_ontology(), **kwargs)
