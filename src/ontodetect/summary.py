@@ -78,7 +78,7 @@ def estimate_spacing(xyz: np.ndarray, *, sample: int = SAMPLE_SIZE, seed: int = 
     --------
     >>> import numpy as np
     >>> g = np.stack(np.meshgrid(np.arange(10), np.arange(10), [0]), -1).reshape(-1, 3)
-    >>> float(estimate_spacing(g * 0.02))
+    >>> round(estimate_spacing(g * 0.02), 6)
     0.02
     """
     xyz = np.asarray(xyz, dtype=np.float64)

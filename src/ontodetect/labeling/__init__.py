@@ -62,7 +62,7 @@ def energy(p: float, f: float, *, beta: float = 0.5, gamma: float = 0.5) -> floa
     Examples
     --------
     >>> round(energy(0.604, 1.0), 4)
-    0.3122
+    0.3112
     """
     if not math.isclose(beta + gamma, 1.0, abs_tol=1e-9):
         raise InvalidParameterError("beta + gamma", "equal to 1", beta + gamma)
