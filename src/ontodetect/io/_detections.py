@@ -1,0 +1,117 @@
+"""``detections.json``: the contract between ontodetect and whoever uses its results.
+
+The layout is fixed in DESIGN.md (format ``ontodetect.detections/1``); extra keys
+are allowed, the listed ones keep their meaning. :func:`read_detections` checks
+every listed key so that evaluation of stored results fails with a clear message
+instead of a wrong score.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import CorruptFileError, ReadError
+from ._atomic import atomic_write_text
+
+__all__ = ["DETECTIONS_FORMAT", "read_detections", "validate_detections", "write_detections"]
+
+DETECTIONS_FORMAT = "ontodetect.detections/1"
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {str(k): _jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return _jsonable(value.tolist())
+    if isinstance(value, np.generic):
+        return _jsonable(value.item())
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    return value
+
+
+def write_detections(path: str | os.PathLike[str], document: dict[str, Any]) -> Path:
+    """Validate and write a detections document atomically (compact point lists, indented rest)."""
+    doc = _jsonable(document)
+    validate_detections(doc, str(path))
+    # Index lists go on one line each: readable, and a tenth of the size of one number a line.
+    marked = {**doc, "detections": [
+        {**d, "point_indices": f"@@points{k}@@"} for k, d in enumerate(doc["detections"])]}
+    text = json.dumps(marked, indent=2)
+    for k, d in enumerate(doc["detections"]):
+        text = text.replace(f'"@@points{k}@@"', json.dumps(d["point_indices"]), 1)
+    return atomic_write_text(path, text + "\n")
+
+
+def _fail(source: str, where: str, problem: str) -> CorruptFileError:
+    return CorruptFileError(source, f"{where}: {problem}")
+
+
+def _vec(v: Any, n: int) -> bool:
+    return (isinstance(v, list) and len(v) == n
+            and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v))
+
+
+def validate_detections(doc: Any, source: str = "detections.json") -> None:
+    """Raise CorruptFileError naming the key when ``doc`` breaks the contract."""
+    if not isinstance(doc, dict):
+        raise _fail(source, "top level", "expected a JSON object")
+    if doc.get("format") != DETECTIONS_FORMAT:
+        raise _fail(source, "format", f"expected {DETECTIONS_FORMAT!r}, got {doc.get('format')!r}")
+    if not isinstance(doc.get("num_points"), int) or doc["num_points"] < 0:
+        raise _fail(source, "num_points", f"expected a count, got {doc.get('num_points')!r}")
+    frame = doc.get("frame")
+    if not isinstance(frame, dict) or not _vec(frame.get("up"), 3):
+        raise _fail(source, "frame", "expected {up: [x, y, z], ground_z, scale}")
+    dets = doc.get("detections")
+    if not isinstance(dets, list):
+        raise _fail(source, "detections", "expected a list")
+    n = doc["num_points"]
+    for k, det in enumerate(dets):
+        where = f"detections[{k}]"
+        if not isinstance(det, dict):
+            raise _fail(source, where, "expected an object")
+        for key, kind in (("id", int), ("label", str), ("score", (int, float))):
+            if not isinstance(det.get(key), kind) or isinstance(det.get(key), bool):
+                raise _fail(source, f"{where}.{key}", f"missing or of the wrong type: "
+                                                      f"{det.get(key)!r}")
+        box = det.get("box")
+        if (not isinstance(box, dict) or not _vec(box.get("center"), 3)
+                or not _vec(box.get("size"), 3) or not isinstance(box.get("yaw"), (int, float))):
+            raise _fail(source, f"{where}.box", "expected {center: [3], size: [3], yaw}")
+        pts = det.get("point_indices")
+        if not isinstance(pts, list) or not all(isinstance(i, int) for i in pts):
+            raise _fail(source, f"{where}.point_indices", "expected a list of integers")
+        if pts and (min(pts) < 0 or max(pts) >= n):
+            raise _fail(source, f"{where}.point_indices",
+                        f"indices must lie in [0, {n}) (num_points)")
+        for key in ("probabilities", "costs"):
+            if key in det and not isinstance(det[key], dict):
+                raise _fail(source, f"{where}.{key}", "expected an object")
+
+
+def read_detections(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """Read and validate a ``detections.json``."""
+    p = Path(path)
+    if p.is_dir():
+        p = p / "detections.json"
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ReadError(p, "no such file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ReadError(p, f"cannot read ({exc})") from exc
+    try:
+        doc = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise CorruptFileError(p, f"not valid JSON: {exc.msg} at line {exc.lineno}") from exc
+    validate_detections(doc, str(p))
+    return doc
