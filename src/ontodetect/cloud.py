@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Mapping
-from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any
 
@@ -39,7 +38,6 @@ def _frozen(a: NDArray[Any]) -> NDArray[Any]:
     return a
 
 
-@dataclass(frozen=True, eq=False, repr=False)
 class PointCloud:
     """An immutable point cloud.
 
@@ -58,18 +56,57 @@ class PointCloud:
         Extra per-point values (``label``, ``instance``, ``intensity``...).
     index : (n,) int64
         Row of every point in the file it came from (``arange(n)`` when nothing
-        was dropped).
+        was dropped; then it is only built when first asked for, which saves a
+        large read the time and memory of one more array).
     meta : mapping of str to object
         Where the cloud came from (``source``, ``format``, organized ``width``
         and ``height``, ...).
     """
 
+    __slots__ = ("_index", "fields", "meta", "normals", "rgb", "xyz")
+
     xyz: NDArray[np.float64]
-    rgb: NDArray[np.uint8] | None = None
-    normals: NDArray[np.float64] | None = None
-    fields: Mapping[str, NDArray[Any]] = field(default_factory=lambda: MappingProxyType({}))
-    index: NDArray[np.int64] = field(default=None)  # type: ignore[assignment]
-    meta: Mapping[str, Any] = field(default_factory=lambda: MappingProxyType({}))
+    rgb: NDArray[np.uint8] | None
+    normals: NDArray[np.float64] | None
+    fields: Mapping[str, NDArray[Any]]
+    meta: Mapping[str, Any]
+
+    def __init__(
+        self,
+        xyz: NDArray[np.float64],
+        rgb: NDArray[np.uint8] | None = None,
+        normals: NDArray[np.float64] | None = None,
+        fields: Mapping[str, NDArray[Any]] | None = None,
+        index: NDArray[np.int64] | None = None,
+        meta: Mapping[str, Any] | None = None,
+    ) -> None:
+        setter = object.__setattr__
+        setter(self, "xyz", xyz)
+        setter(self, "rgb", rgb)
+        setter(self, "normals", normals)
+        setter(self, "fields", fields if fields is not None else MappingProxyType({}))
+        setter(self, "_index", index)
+        setter(self, "meta", meta if meta is not None else MappingProxyType({}))
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        raise AttributeError(f"PointCloud is immutable: cannot set {name!r}")
+
+    def __delattr__(self, name: str) -> None:
+        raise AttributeError(f"PointCloud is immutable: cannot delete {name!r}")
+
+    @property
+    def index(self) -> NDArray[np.int64]:
+        """(n,) int64: row of every point in its source file."""
+        if self._index is None:
+            object.__setattr__(self, "_index", _frozen(np.arange(len(self), dtype=np.int64)))
+        return self._index
+
+    @property
+    def is_complete(self) -> bool:
+        """True when the cloud holds every row of its file in order (no point dropped)."""
+        return self._index is None or (
+            len(self._index) == 0 or (self._index[0] == 0 and self._index[-1] == len(self) - 1
+                                      and bool(np.all(np.diff(self._index) == 1))))
 
     # -- basic facts -----------------------------------------------------------------
     def __len__(self) -> int:
@@ -155,7 +192,7 @@ class PointCloud:
         """
         current = {
             "xyz": self.xyz, "rgb": self.rgb, "normals": self.normals,
-            "fields": dict(self.fields), "index": self.index, "meta": dict(self.meta),
+            "fields": dict(self.fields), "index": self._index, "meta": dict(self.meta),
         }
         unknown = set(changes) - set(current)
         if unknown:
@@ -173,7 +210,7 @@ class PointCloud:
         """A new cloud sharing the arrays, with entries added to :attr:`meta`."""
         merged = dict(self.meta)
         merged.update(meta)
-        return PointCloud(self.xyz, self.rgb, self.normals, self.fields, self.index,
+        return PointCloud(self.xyz, self.rgb, self.normals, self.fields, self._index,
                           MappingProxyType(merged))
 
     # -- Open3D ----------------------------------------------------------------------
@@ -290,15 +327,20 @@ def point_cloud(
         if arr.dtype.kind not in "biuf":
             raise InvalidParameterError(f"fields[{name!r}]", "numeric", f"dtype {arr.dtype}")
         extra[name] = arr
-    if index is None:
-        idx = np.arange(n, dtype=np.int64)
-    else:
+    idx: NDArray[np.int64] | None = None
+    if index is not None:
         idx = np.array(index, dtype=np.int64, copy=True) if copy else np.asarray(index, np.int64)
         if idx.shape != (n,):
             raise InvalidParameterError("index", f"an array of shape ({n},)", f"shape {idx.shape}")
 
-    finite = np.isfinite(pts).all(axis=1)
+    # One sum is far cheaper than a per-row test; it overflows only for absurd values,
+    # and then the per-row test decides.
+    with np.errstate(over="ignore", invalid="ignore"):
+        total_finite = bool(np.isfinite(pts.sum()))
+    finite = np.ones(n, dtype=bool) if total_finite else np.isfinite(pts).all(axis=1)
     if not finite.all():
+        if idx is None:
+            idx = np.arange(n, dtype=np.int64)
         bad = int(n - finite.sum())
         if on_nonfinite == "raise":
             raise InvalidParameterError("xyz", "finite coordinates", f"{bad} NaN/Inf points")
@@ -320,6 +362,6 @@ def point_cloud(
         rgb=None if cols is None else _frozen(cols),
         normals=None if nrm is None else _frozen(nrm),
         fields=MappingProxyType({k: _frozen(v) for k, v in extra.items()}),
-        index=_frozen(idx),
+        index=None if idx is None else _frozen(idx),
         meta=MappingProxyType(dict(meta or {})),
     )
