@@ -41,7 +41,8 @@ def test_detect_format_folders(tmp_path):
 def test_unknown_extension_lists_supported_formats(tmp_path):
     f = tmp_path / "cloud.abc"
     f.write_text("1 2 3\n")
-    with pytest.raises(UnsupportedFormatError, match=r"cloud\.abc: unknown file extension '\.abc'.*ply"):
+    msg = r"cloud\.abc: unknown file extension '\.abc'.*ply"
+    with pytest.raises(UnsupportedFormatError, match=msg):
         read_cloud(f)
 
 
