@@ -1,0 +1,72 @@
+"""Simulated indoor scenes with ground truth: rooms, furniture and virtual sensors.
+
+- :mod:`~ontodetect.synth.scene`: the :class:`Scene` / :class:`SceneObject` data model.
+- :mod:`~ontodetect.synth.rooms`: :func:`build_room` and :data:`ROOM_TYPES`.
+- :mod:`~ontodetect.synth.sensors`: RGB-D camera, laser scanner, monocular SLAM.
+- :mod:`~ontodetect.synth.dataset`: :func:`synthesize`, :func:`write_synth`,
+  :func:`load_synth`, :func:`synthesize_many`.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from .dataset import (
+    SYNTH_FORMAT,
+    SynthResult,
+    load_synth,
+    room_types,
+    sensor_options,
+    synthesize,
+    synthesize_many,
+    write_synth,
+)
+from .scene import CLASS_IDS, CLASS_NAMES, OrientedBox, Scene, SceneObject
+from .sensors import (
+    SENSORS,
+    RGBDSensor,
+    SensorOutput,
+    camera_trajectory,
+    scan_monocular_slam,
+    scan_rgbd_frame,
+    scan_rgbd_trajectory,
+    scan_tls,
+    tls_stations,
+)
+
+__all__ = [
+    "CLASS_IDS",
+    "CLASS_NAMES",
+    "ROOM_TYPES",
+    "SENSORS",
+    "SYNTH_FORMAT",
+    "OrientedBox",
+    "RGBDSensor",
+    "Scene",
+    "SceneObject",
+    "SensorOutput",
+    "SynthResult",
+    "build_room",
+    "camera_trajectory",
+    "load_synth",
+    "room_types",
+    "scan_monocular_slam",
+    "scan_rgbd_frame",
+    "scan_rgbd_trajectory",
+    "scan_tls",
+    "sensor_options",
+    "synthesize",
+    "synthesize_many",
+    "tls_stations",
+    "write_synth",
+]
+
+
+def __getattr__(name: str) -> Any:
+    # The room builders are imported on first use: they are big, and the sensors and
+    # the dataset reader do not need them.
+    if name in ("build_room", "ROOM_TYPES"):
+        from . import rooms
+
+        return getattr(rooms, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
