@@ -1,0 +1,43 @@
+"""Options several commands share: configuration, overrides, ontology, room."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from ..config import Config
+from ..errors import InvalidParameterError, ReadError
+from ..ontology import Ontology, load_ontology
+
+
+def load_config(config: Path | None, overrides: list[str]) -> Config:
+    """The configuration from ``--config`` (or the defaults) with ``--set`` overrides."""
+    cfg = Config.from_yaml(config) if config is not None else Config()
+    return cfg.with_overrides(overrides) if overrides else cfg
+
+
+def load_ontology_option(files: list[Path], only: bool) -> Ontology:
+    """The built-in ontology with ``--ontology`` files merged in (or only them)."""
+    if only and not files:
+        raise InvalidParameterError("--ontology-only", "used with at least one --ontology FILE",
+                                    "no file")
+    return load_ontology(*files, replace=only)
+
+
+def room_option(room: str | None, room_probs: Path | None) -> str | dict[str, Any] | None:
+    """``--room NAME`` or ``--room-probs FILE`` (a YAML/JSON mapping category -> weight)."""
+    if room is not None and room_probs is not None:
+        raise InvalidParameterError("--room-probs", "not combined with --room", str(room_probs))
+    if room_probs is None:
+        return room
+    try:
+        data = yaml.safe_load(room_probs.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ReadError(room_probs, "no such file") from None
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
+        raise ReadError(room_probs, f"not a readable YAML/JSON mapping ({exc})") from exc
+    if not isinstance(data, dict):
+        raise ReadError(room_probs, "expected a mapping of room category to probability")
+    return data

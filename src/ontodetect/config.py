@@ -1,0 +1,652 @@
+"""One typed, validated configuration for every stage of the pipeline.
+
+A :class:`Config` holds one frozen section per stage: :class:`PrepareConfig`
+(scale, denoising, levelling, voxel grid, floor/walls/ceiling),
+:class:`ClusterConfig` (candidate object clusters) and :class:`PlaneConfig`
+(MSAC planes inside each cluster). Defaults come from Table 4.1 of the thesis
+where it has them; each is cited next to its field. Counts of points depend on
+the sensor (a 50,000-point ScanNet room and a 5-million-point lidar scan of the
+same room), so this configuration speaks in surfaces (m²) and lengths instead:
+an area is turned into a number of voxels with the sampling spacing of the scene.
+
+Every value is checked in one place, :func:`validate_section`, against the rule
+declared next to its field; a bad value raises
+:class:`~ontodetect.errors.InvalidParameterError` naming its dotted path, e.g.
+``cluster.radius``. A configuration round-trips through plain dictionaries and
+YAML, and the command line overrides single values with ``section.key=value``.
+
+Later stages add their own sections by adding a field to :class:`Config` whose
+type is a frozen dataclass with ``SECTION`` set; loading, validation,
+overrides and serialisation pick it up without other changes.
+
+Examples
+--------
+>>> cfg = Config().with_overrides(["cluster.radius=0.04"])
+>>> cfg.cluster.radius
+0.04
+>>> Config.from_dict({"prepare": {"voxel_size": 0.03}}).prepare.voxel_size
+0.03
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, ClassVar
+
+import yaml
+
+from .errors import InvalidParameterError, OntoDetectError, ReadError
+
+__all__ = [
+    "ClusterConfig",
+    "Config",
+    "ConfigValueError",
+    "PlaneConfig",
+    "PrepareConfig",
+    "UnknownKeyError",
+    "parse_override",
+    "validate_section",
+]
+
+FORMAT = "ontodetect.config/1"
+
+
+class UnknownKeyError(InvalidParameterError):
+    """A configuration names a section or parameter that does not exist."""
+
+    def __init__(self, key: str, known: Iterable[str], source: str | None = None) -> None:
+        self.source = source
+        known_list = ", ".join(sorted(known))
+        OntoDetectError.__init__(
+            self,
+            f"{source + ': ' if source else ''}unknown configuration key {key!r} "
+            f"(expected one of: {known_list})",
+        )
+        self.name, self.rule, self.value = key, f"one of {known_list}", key
+
+
+class ConfigValueError(InvalidParameterError):
+    """A value in a configuration file breaks its rule; the message names the file too."""
+
+    def __init__(self, source: str, error: InvalidParameterError) -> None:
+        self.source = source
+        self.name, self.rule, self.value = error.name, error.rule, error.value
+        OntoDetectError.__init__(self, f"{source}: {error}")
+
+
+# -- rules ---------------------------------------------------------------------------------
+class _Rule:
+    """A constraint on one value: ``check`` returns the value, normalised, or raises."""
+
+    def describe(self) -> str:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def check(self, name: str, value: Any) -> Any:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+
+def _fmt(x: float) -> str:
+    if math.isinf(x):
+        return "inf" if x > 0 else "-inf"
+    return f"{x:g}"
+
+
+@dataclass(frozen=True)
+class Interval(_Rule):
+    """A real (or integer) number in a range; ``closed`` says which ends are included."""
+
+    lo: float = -math.inf
+    hi: float = math.inf
+    closed: str = "neither"  # "neither", "left", "right", "both"
+    integer: bool = False
+
+    def describe(self) -> str:
+        left = "[" if self.closed in ("left", "both") else "("
+        right = "]" if self.closed in ("right", "both") else ")"
+        kind = "an int" if self.integer else "a float"
+        return f"{kind} in the range {left}{_fmt(self.lo)}, {_fmt(self.hi)}{right}"
+
+    def contains(self, x: float) -> bool:
+        lo_ok = x >= self.lo if self.closed in ("left", "both") else x > self.lo
+        hi_ok = x <= self.hi if self.closed in ("right", "both") else x < self.hi
+        return lo_ok and hi_ok
+
+    def check(self, name: str, value: Any) -> Any:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise InvalidParameterError(name, self.describe(), value)
+        if self.integer and isinstance(value, float) and not value.is_integer():
+            raise InvalidParameterError(name, self.describe(), value)
+        number = int(value) if self.integer else float(value)
+        if math.isnan(number) or not self.contains(number):
+            raise InvalidParameterError(name, self.describe(), value)
+        return number
+
+
+@dataclass(frozen=True)
+class Pair(_Rule):
+    """Two numbers ``[low, high]`` with ``low <= high``, both obeying ``each``."""
+
+    each: Interval
+
+    def describe(self) -> str:
+        return f"a pair [low, high] with low <= high, each {self.each.describe()}"
+
+    def check(self, name: str, value: Any) -> Any:
+        if not isinstance(value, (list, tuple)) or len(value) != 2:
+            raise InvalidParameterError(name, self.describe(), value)
+        try:
+            lo, hi = (self.each.check(name, v) for v in value)
+        except InvalidParameterError:
+            raise InvalidParameterError(name, self.describe(), value) from None
+        if lo > hi:
+            raise InvalidParameterError(name, self.describe(), value)
+        return (lo, hi)
+
+
+@dataclass(frozen=True)
+class OneOf(_Rule):
+    """One of a fixed set of strings."""
+
+    options: tuple[str, ...]
+
+    def describe(self) -> str:
+        return "one of " + ", ".join(repr(o) for o in self.options)
+
+    def check(self, name: str, value: Any) -> Any:
+        if not isinstance(value, str) or value not in self.options:
+            raise InvalidParameterError(name, self.describe(), value)
+        return value
+
+
+@dataclass(frozen=True)
+class Boolean(_Rule):
+    def describe(self) -> str:
+        return "true or false"
+
+    def check(self, name: str, value: Any) -> Any:
+        if not isinstance(value, bool):
+            raise InvalidParameterError(name, self.describe(), value)
+        return value
+
+
+@dataclass(frozen=True)
+class Nullable(_Rule):
+    """``None`` (meaning "automatic" or "off") or a value obeying ``rule``."""
+
+    rule: _Rule
+
+    def describe(self) -> str:
+        return f"null or {self.rule.describe()}"
+
+    def check(self, name: str, value: Any) -> Any:
+        if value is None:
+            return None
+        try:
+            return self.rule.check(name, value)
+        except InvalidParameterError:
+            raise InvalidParameterError(name, self.describe(), value) from None
+
+
+def _param(default: Any, rule: _Rule, doc: str) -> Any:
+    """A dataclass field with its validation rule and a one-line description."""
+    return field(default=default, metadata={"rule": rule, "doc": doc})
+
+
+POSITIVE = Interval(0.0, math.inf)
+NON_NEGATIVE = Interval(0.0, math.inf, "left")
+FRACTION = Interval(0.0, 1.0, "both")
+ANGLE = Interval(0.0, 90.0, "both")
+UP_CHOICES = ("z", "-z", "y", "-y", "x", "-x", "auto")
+
+
+def validate_section(section: Any) -> dict[str, Any]:
+    """Check every field of a configuration section against its rule.
+
+    Parameters
+    ----------
+    section : dataclass instance
+        A section such as :class:`ClusterConfig`.
+
+    Returns
+    -------
+    dict
+        Field name -> normalised value (ints for integer fields, tuples for pairs).
+
+    Raises
+    ------
+    InvalidParameterError
+        Naming ``<section>.<field>``, the rule and the value.
+    """
+    out = {}
+    prefix = getattr(section, "SECTION", type(section).__name__)
+    for f in dataclasses.fields(section):
+        rule = f.metadata.get("rule")
+        value = getattr(section, f.name)
+        out[f.name] = value if rule is None else rule.check(f"{prefix}.{f.name}", value)
+    return out
+
+
+class _Section:
+    """Shared behaviour of the frozen section dataclasses: validate on creation."""
+
+    SECTION: ClassVar[str] = ""
+
+    def __post_init__(self) -> None:
+        for name, value in validate_section(self).items():
+            object.__setattr__(self, name, value)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain values (pairs as lists), ready for YAML or JSON."""
+        return {
+            f.name: list(v) if isinstance(v, tuple) else v
+            for f in dataclasses.fields(self)  # type: ignore[arg-type]
+            for v in [getattr(self, f.name)]
+        }
+
+    @classmethod
+    def describe(cls) -> list[tuple[str, Any, str, str]]:
+        """(name, default, rule, description) of every field, for documentation."""
+        rows = []
+        for f in dataclasses.fields(cls):  # type: ignore[arg-type]
+            rule = f.metadata.get("rule")
+            rows.append(
+                (f.name, f.default, rule.describe() if rule else "", f.metadata.get("doc", ""))
+            )
+        return rows
+
+
+# -- sections ------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class PrepareConfig(_Section):
+    """Preparation: scale, denoising, levelling, voxel grid and structural planes (§3.2–3.3)."""
+
+    SECTION: ClassVar[str] = "prepare"
+
+    # Table 4.1: voxel size 2 cm. The voxel grid is also the thesis's downsampling step
+    # (Table 4.1: downsampling rate 20–25): a grid average keeps one point per occupied
+    # voxel whatever the sensor's density, which a fixed rate cannot.
+    voxel_size: float = _param(0.02, POSITIVE, "Voxel edge (m) of the grid-average cloud.")
+    # §3.2: X_sc = k_s X_c. None = 1, unless the units guess says millimetres.
+    scale: float | None = _param(
+        None, Nullable(POSITIVE), "Scale factor k_s; null = from units guess or travel."
+    )
+    guess_units: bool = _param(
+        True, Boolean(), "Rescale clouds whose size says millimetres to metres."
+    )
+    up: str = _param(
+        "z",
+        OneOf(UP_CHOICES),
+        "Up axis of the input, or 'auto' to estimate it from floor and walls.",
+    )
+    # Scans drift and maps are rarely exactly level: the floor's own normal is taken as up
+    # when it is within a few degrees of the given or estimated axis.
+    level_on_floor: bool = _param(
+        True, Boolean(), "Refine the up direction with the floor plane's normal."
+    )
+    # Reconstructions bend: real scanned floors rise 20 cm across a room. Heights are
+    # measured above a floor height map with tiles of this size; 0 = one flat floor.
+    floor_tile: float = _param(
+        0.5, NON_NEGATIVE, "Tile (m) of the floor height map; 0 = flat floor plane."
+    )
+    max_floor_warp: float = _param(
+        0.3, NON_NEGATIVE, "Largest deviation (m) of the floor from its plane."
+    )
+    denoise: str = _param(
+        "statistical",
+        OneOf(("statistical", "radius", "both", "none")),
+        "Outlier removal on the voxel grid (§3.3 filtering).",
+    )
+    sor_neighbors: int = _param(
+        8,
+        Interval(1, 1000, "both", integer=True),
+        "Statistical outlier removal: neighbours per voxel.",
+    )
+    sor_std_ratio: float = _param(
+        3.0, POSITIVE, "Statistical outlier removal: cut at mean + ratio * std."
+    )
+    ror_radius: float = _param(0.1, POSITIVE, "Radius outlier removal: radius (m).")
+    ror_min_neighbors: int = _param(
+        2,
+        Interval(1, 10_000, "both", integer=True),
+        "Radius outlier removal: fewest occupied voxels around.",
+    )
+    far_percentile: float = _param(
+        0.5, Interval(0.0, 50.0, "left"), "Far outliers: percent trimmed per side for the box."
+    )
+    far_margin: float = _param(
+        1.0, NON_NEGATIVE, "Far outliers: points this far (m) outside the box are dropped."
+    )
+    smoothing: bool = _param(
+        False, Boolean(), "Project voxel centres on local planes (less scatter on planes)."
+    )
+    # Table 4.1: altitude cut-off 140 cm; no seat or table is higher.
+    altitude_cutoff: float = _param(
+        1.4, POSITIVE, "Objects are searched below this height (m) above floor."
+    )
+    structure: bool = _param(True, Boolean(), "Find floor, walls and ceiling and keep them apart.")
+    structure_cell: float = _param(
+        0.1,
+        POSITIVE,
+        "Smallest cell (m) of the coarse plane fits (floor, walls, up); "
+        "at least 5 sampling spacings.",
+    )
+    floor_band: float = _param(
+        0.03, NON_NEGATIVE, "Voxels up to this height (m) above the floor are floor."
+    )
+    min_floor_area: float = _param(
+        0.5, POSITIVE, "Smallest horizontal surface (m²) taken as floor or ceiling."
+    )
+    min_wall_length: float = _param(1.0, POSITIVE, "Shortest vertical plane (m) taken as a wall.")
+    min_wall_height: float = _param(1.2, POSITIVE, "Lowest vertical extent (m) of a wall.")
+    wall_band: float = _param(
+        0.04, NON_NEGATIVE, "Voxels within this distance (m) of a wall plane are wall."
+    )
+
+
+@dataclass(frozen=True)
+class ClusterConfig(_Section):
+    """Candidate object clusters (§3.3, Algorithm 1 step 7)."""
+
+    SECTION: ClassVar[str] = "cluster"
+
+    method: str = _param(
+        "parts",
+        OneOf(("parts", "dbscan", "euclidean", "region_growing")),
+        "Clustering: density regions split at seat/table parts, or plain.",
+    )
+    # Table 4.1: neighbourhood radius for density-based clustering 2–5 cm.
+    radius: float = _param(0.05, POSITIVE, "Neighbourhood radius (m) of density clustering.")
+    # Sparse scans (a few cm between points) would fall apart at 5 cm: the radius is
+    # raised to this multiple of the scene's sampling spacing when that is larger.
+    spacing_factor: float = _param(
+        2.5, NON_NEGATIVE, "Radius is at least this times the sampling spacing; 0 = off."
+    )
+    # Table 4.1: cluster density >= 990 points. As a density: a voxel is a core voxel
+    # when its neighbourhood is at least this full compared with a flat surface.
+    core_fill: float = _param(
+        0.05, FRACTION, "Core voxel: share of a flat disc of the radius that is occupied."
+    )
+    # Table 4.1: cluster density >= 990 points, i.e. about 0.4 m² at the thesis's 2 cm
+    # voxels of a complete scan; occluded single views show less, hence a smaller floor.
+    min_surface: float = _param(0.04, NON_NEGATIVE, "Smallest cluster surface (m²).")
+    # Table 4.1: length of cluster (in any direction) 30–200 cm.
+    length: tuple[float, float] = _param(
+        (0.3, 2.0), Pair(NON_NEGATIVE), "Cluster length range (m) in any direction."
+    )
+    # Clusters outside the limits are kept with a flag, not dropped, unless asked.
+    drop_flagged: bool = _param(False, Boolean(), "Drop flagged clusters instead of keeping them.")
+    # Table 4.1: number of planes in a cluster >= 2.
+    min_planes: int = _param(
+        2,
+        Interval(0, 1000, "both", integer=True),
+        "Fewest MSAC planes for a cluster not to be flagged.",
+    )
+    # Table 4.1: height of seating plane 35–75 cm; tables reach a little higher.
+    part_height: tuple[float, float] = _param(
+        (0.3, 1.1), Pair(NON_NEGATIVE), "Heights (m) of horizontal parts that seed clusters."
+    )
+    # Table 4.1: inclination of seating plane ±6°; voxel normals of a sparse scan scatter
+    # more than a fitted plane does, so the per-voxel tolerance is wider.
+    part_tilt: float = _param(
+        20.0, ANGLE, "Largest tilt (deg) of a voxel normal in a horizontal part."
+    )
+    min_part_area: float = _param(
+        0.02, NON_NEGATIVE, "Smallest horizontal part (m²) that seeds a cluster."
+    )
+    # Table 4.1: plane size 25–150 cm. Armrests and backrest rails are narrower; a seat
+    # seen partly behind a table edge a little narrower, hence 20 cm.
+    min_part_width: float = _param(
+        0.2, NON_NEGATIVE, "Shortest side (m) of a horizontal part that seeds a cluster."
+    )
+    max_part_step: float = _param(
+        0.03, POSITIVE, "Largest height step (m) between neighbours within a part."
+    )
+    max_grow: float = _param(1.2, POSITIVE, "Parts claim voxels up to this path length (m) away.")
+    # Region growing: neighbours join while their normals differ by less than this.
+    smoothness: float = _param(15.0, ANGLE, "Region growing: largest normal change (deg).")
+
+
+@dataclass(frozen=True)
+class PlaneConfig(_Section):
+    """MSAC planes inside each cluster (§3.3, Algorithm 1 step 8)."""
+
+    SECTION: ClassVar[str] = "planes"
+
+    # Table 4.1: plane inlier distance 0.5–1.5 cm; §4.1 sets 1 cm.
+    threshold: float = _param(0.01, POSITIVE, "MSAC inlier distance (m).")
+    # Table 4.1: plane size 25–150 cm; a plane shorter than this is a leg or clutter.
+    min_extent: float = _param(0.25, NON_NEGATIVE, "Shortest plane length (m) kept.")
+    min_area: float = _param(0.01, NON_NEGATIVE, "Smallest plane surface (m²) kept.")
+    max_planes: int = _param(
+        8, Interval(1, 1000, "both", integer=True), "Most planes extracted per cluster."
+    )
+    max_trials: int = _param(
+        1000, Interval(1, 10**7, "both", integer=True), "MSAC hypotheses per plane."
+    )
+
+
+# -- the whole configuration ---------------------------------------------------------------
+@dataclass(frozen=True)
+class Config:
+    """The configuration of every stage, one section each.
+
+    Attributes
+    ----------
+    prepare : PrepareConfig
+    cluster : ClusterConfig
+    planes : PlaneConfig
+
+    Examples
+    --------
+    >>> cfg = Config()
+    >>> cfg.cluster.length
+    (0.3, 2.0)
+    >>> cfg.get("planes.threshold")
+    0.01
+    """
+
+    prepare: PrepareConfig = field(default_factory=PrepareConfig)
+    cluster: ClusterConfig = field(default_factory=ClusterConfig)
+    planes: PlaneConfig = field(default_factory=PlaneConfig)
+
+    def __post_init__(self) -> None:
+        for name, cls in self.section_classes().items():
+            value = getattr(self, name)
+            if not isinstance(value, cls):
+                raise InvalidParameterError(name, f"a {cls.__name__}", type(value).__name__)
+
+    # -- structure ---------------------------------------------------------------------
+    @classmethod
+    def section_classes(cls) -> dict[str, type]:
+        """Section name -> its dataclass, for every section this configuration holds."""
+        out = {}
+        for f in dataclasses.fields(cls):
+            factory = f.default_factory  # every section field has one
+            out[f.name] = factory  # type: ignore[assignment]
+        return out
+
+    # -- dictionaries and YAML -----------------------------------------------------------
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any] | None, *, source: str | None = None) -> Config:
+        """Build from nested mappings; missing keys keep their defaults.
+
+        Parameters
+        ----------
+        data : mapping
+            ``{"cluster": {"radius": 0.04}, ...}``. A ``format`` key, if present,
+            must be ``"ontodetect.config/1"``.
+        source : str, optional
+            File the data came from, named in error messages.
+
+        Raises
+        ------
+        InvalidParameterError
+            An unknown section or key (the message names it and the file), or a
+            value breaking its rule.
+        """
+        try:
+            return cls._from_dict(data, source)
+        except (UnknownKeyError, ConfigValueError):
+            raise
+        except InvalidParameterError as exc:
+            if source is None:
+                raise
+            raise ConfigValueError(source, exc) from None
+
+    @classmethod
+    def _from_dict(cls, data: Mapping[str, Any] | None, source: str | None) -> Config:
+        if data is None:
+            data = {}
+        if not isinstance(data, Mapping):
+            raise InvalidParameterError(
+                "configuration", "a mapping of sections", type(data).__name__
+            )
+        classes = cls.section_classes()
+        sections: dict[str, Any] = {}
+        for key, values in data.items():
+            if key == "format":
+                if values != FORMAT:
+                    raise InvalidParameterError("format", repr(FORMAT), values)
+                continue
+            if key not in classes:
+                raise UnknownKeyError(str(key), classes, source)
+            if values is None:
+                values = {}
+            if not isinstance(values, Mapping):
+                raise InvalidParameterError(key, "a mapping of parameters", values)
+            names = {f.name for f in dataclasses.fields(classes[key])}
+            for name in values:
+                if name not in names:
+                    raise UnknownKeyError(f"{key}.{name}", (f"{key}.{n}" for n in names), source)
+            sections[key] = classes[key](**values)
+        return cls(**sections)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Nested plain dictionary with a ``format`` key; ``from_dict`` reads it back."""
+        out: dict[str, Any] = {"format": FORMAT}
+        for name in self.section_classes():
+            out[name] = getattr(self, name).to_dict()
+        return out
+
+    @classmethod
+    def from_yaml(cls, path: str | os.PathLike[str]) -> Config:
+        """Read a YAML configuration file (any subset of sections and keys).
+
+        Raises
+        ------
+        ReadError
+            The file cannot be read or is not valid YAML.
+        InvalidParameterError
+            An unknown key or a bad value; the message names the key and the file.
+        """
+        p = Path(path)
+        try:
+            text = p.read_text(encoding="utf-8")
+        except FileNotFoundError:
+            raise ReadError(p, "no such configuration file") from None
+        except (OSError, UnicodeDecodeError) as exc:
+            raise ReadError(p, f"cannot read configuration: {exc}") from None
+        return cls.from_yaml_text(text, source=str(p))
+
+    @classmethod
+    def from_yaml_text(cls, text: str, *, source: str | None = None) -> Config:
+        """Parse YAML text; ``source`` names it in error messages."""
+        try:
+            data = yaml.safe_load(text)
+        except yaml.YAMLError as exc:
+            mark = getattr(exc, "problem_mark", None)
+            line = f" (line {mark.line + 1})" if mark is not None else ""
+            raise ReadError(
+                source or "<config>", f"invalid YAML{line}: {getattr(exc, 'problem', None) or exc}"
+            ) from None
+        return cls.from_dict(data, source=source)
+
+    def to_yaml(self, path: str | os.PathLike[str] | None = None) -> str:
+        """YAML text of the whole configuration; written atomically to ``path`` if given."""
+        text = yaml.dump(self.to_dict(), Dumper=_Dumper, sort_keys=False)
+        if path is not None:
+            from .io import atomic_write_text
+
+            atomic_write_text(Path(path), text)
+        return text
+
+    # -- single values -------------------------------------------------------------------
+    def get(self, key: str) -> Any:
+        """The value at a dotted path such as ``"cluster.radius"``."""
+        section, name = self._split(key)
+        return getattr(getattr(self, section), name)
+
+    def replace(self, **changes: Mapping[str, Any]) -> Config:
+        """A copy with some parameters changed: ``cfg.replace(cluster={"radius": 0.04})``."""
+        classes = self.section_classes()
+        new = {}
+        for section, values in changes.items():
+            if section not in classes:
+                raise UnknownKeyError(section, classes)
+            merged = getattr(self, section).to_dict()
+            for name in values:
+                if name not in merged:
+                    raise UnknownKeyError(f"{section}.{name}", (f"{section}.{n}" for n in merged))
+            merged.update(values)
+            new[section] = classes[section](**merged)
+        return dataclasses.replace(self, **new)
+
+    def with_overrides(self, overrides: Iterable[str]) -> Config:
+        """Apply ``section.key=value`` strings (values parsed as YAML scalars or lists).
+
+        Examples
+        --------
+        >>> Config().with_overrides(["cluster.length=[0.2, 3]"]).cluster.length
+        (0.2, 3.0)
+        """
+        changes: dict[str, dict[str, Any]] = {}
+        for text in overrides:
+            key, value = parse_override(text)
+            section, name = self._split(key)
+            changes.setdefault(section, {})[name] = value
+        return self.replace(**changes)
+
+    def _split(self, key: str) -> tuple[str, str]:
+        section, _, name = key.partition(".")
+        classes = self.section_classes()
+        if section not in classes:
+            raise UnknownKeyError(key, (f"{c}.<key>" for c in classes))
+        names = {f.name for f in dataclasses.fields(classes[section])}
+        if name not in names:
+            raise UnknownKeyError(key, (f"{section}.{n}" for n in names))
+        return section, name
+
+
+class _Dumper(yaml.SafeDumper):
+    """Block style for sections, flow style for ``[low, high]`` pairs."""
+
+
+_Dumper.add_representer(
+    list, lambda d, v: d.represent_sequence("tag:yaml.org,2002:seq", v, flow_style=True)
+)
+
+
+def parse_override(text: str) -> tuple[str, Any]:
+    """Split ``"section.key=value"``; the value is read as YAML (``0.04``, ``[1, 2]``, ``null``).
+
+    Examples
+    --------
+    >>> parse_override("cluster.method=dbscan")
+    ('cluster.method', 'dbscan')
+    >>> parse_override("prepare.scale=null")
+    ('prepare.scale', None)
+    """
+    key, sep, raw = text.partition("=")
+    key = key.strip()
+    if not sep or not key:
+        raise InvalidParameterError("--set", "of the form section.key=value", text)
+    try:
+        value = yaml.safe_load(raw) if raw.strip() else None
+    except yaml.YAMLError:
+        value = raw.strip()
+    return key, value

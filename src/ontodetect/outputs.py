@@ -1,0 +1,101 @@
+"""Writing a detection result: detections.json, a labelled PLY and a picture.
+
+Every file is written atomically, so an interrupted run never leaves a
+half-written result beside an older complete one.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .errors import WriteError
+from .io import write_cloud
+from .io._detections import write_detections
+from .pipeline import Result
+from .render import BoxDrawing, render_scene
+
+__all__ = ["OutputFiles", "explain", "write_outputs"]
+
+
+@dataclass(frozen=True)
+class OutputFiles:
+    """Paths of what :func:`write_outputs` wrote."""
+
+    detections: Path
+    labelled: Path
+    picture: Path | None
+
+
+def write_outputs(result: Result, out_dir: str | os.PathLike[str], *,
+                  picture: bool = True, title: str | None = None) -> OutputFiles:
+    """Write ``detections.json``, ``labelled.ply`` and ``detections.png`` into ``out_dir``.
+
+    ``labelled.ply`` holds the input points (as read, minus any dropped as NaN)
+    with two fields: ``label`` (index into ``result.class_names``, -1 for none)
+    and ``instance`` (detection id, 0 for none).
+    """
+    out = Path(out_dir)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise WriteError(out, f"cannot create the output folder ({exc.strerror})") from exc
+    doc = result.to_dict()
+    doc["classes"] = result.class_names
+    det_path = write_detections(out / "detections.json", doc)
+    label, instance = result.point_labels()
+    cloud = result.cloud
+    labelled = cloud.replace(fields={**dict(cloud.fields), "label": label,
+                                     "instance": instance}, normals=None)
+    ply_path = write_cloud(out / "labelled.ply", labelled)
+    png = None
+    if picture:
+        names = result.class_names
+        point_class = np.array([None, *names], dtype=object)[label + 1]
+        counts: dict[str, int] = {}
+        for d in result.detections:
+            counts[d.label] = counts.get(d.label, 0) + 1
+        boxes = [BoxDrawing(d.center, d.size, d.yaw, d.label, f"{d.score:.2f}")
+                 for d in result.detections]
+        src = Path(str(cloud.meta.get("source", ""))).name or "scan"
+        png = render_scene(out / "detections.png", cloud.xyz, rgb=cloud.rgb,
+                           point_class=point_class, boxes=boxes, legend_counts=counts,
+                           title=title or f"{src}: {len(result.detections)} objects")
+    return OutputFiles(det_path, ply_path, png)
+
+
+def explain(result: Result, *, top: int = 3) -> list[dict[str, Any]]:
+    """Per cluster: class probabilities, the constraints of the best classes and label costs.
+
+    This is what ``detect --explain`` prints (the thesis's Tables 4.2 and 4.9).
+    """
+    rows = []
+    for k, (c, s, choice) in enumerate(zip(result.segmentation, result.scores, result.choices)):
+        ranked = sorted(s.probabilities.items(), key=lambda kv: -kv[1])
+        classes = []
+        for name, p in ranked[:top]:
+            if name == "none":
+                classes.append({"class": "none", "probability": p})
+                continue
+            cs = s.classes[name]
+            classes.append({
+                "class": name, "probability": p, "likelihood": cs.likelihood,
+                "prior": float(np.exp(cs.log_prior)),
+                "assignment": dict(cs.assignment),
+                "factors": {part: dict(f) for part, f in cs.factors.items()},
+                "constraints": [
+                    {"part": v.part, "feature": v.feature, "group": v.group,
+                     "value": v.value, "rule": v.gaussian.describe() if v.gaussian else "",
+                     "factor": v.factor} for v in cs.constraints],
+            })
+        rows.append({
+            "cluster": k, "num_points": c.num_points, "box": c.box.to_dict(),
+            "planes": len(c.planes), "flags": dict(c.flags),
+            "label": choice.label, "reason": choice.reason,
+            "costs": dict(choice.costs), "classes": classes,
+        })
+    return rows

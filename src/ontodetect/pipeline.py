@@ -1,0 +1,312 @@
+"""The whole method in one call: read → prepare → segment → score → label (→ fit CAD).
+
+:func:`detect` takes a :class:`~ontodetect.cloud.PointCloud` and returns a
+:class:`Result` holding the detections (in the input file's frame and units, with
+the input file's point rows), every cluster's scores for ``--explain``, and the
+intermediate results. :meth:`Result.to_dict` is the ``detections.json`` contract
+of DESIGN.md.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ._progress import progress
+from .cloud import PointCloud
+from .config import Config
+from .errors import InvalidParameterError
+from .labeling import LabelChoice, label_clusters
+from .ontology import (
+    ClusterDescription,
+    ClusterScores,
+    Ontology,
+    builtin_ontology,
+    class_priors,
+    score_cluster,
+)
+from .segment import Cluster, Segmentation, segment
+
+__all__ = ["Detection", "Result", "describe_cluster", "detect"]
+
+#: Format tag of detections.json.
+DETECTIONS_FORMAT = "ontodetect.detections/1"
+
+
+@dataclass(frozen=True)
+class Detection:
+    """One detected object, in the input file's frame and units.
+
+    Attributes
+    ----------
+    id : int
+        1, 2, ... in order of decreasing score.
+    label : str
+        Class name from the ontology.
+    score : float
+        P_obj|ont of the label.
+    probabilities, costs : mapping of str to float
+        P_obj|ont and energy U of every class.
+    center, size : (3,) float
+        Upright box centre and size (length, breadth, height).
+    yaw : float
+        Angle of the box's length axis about ``frame.up`` (radians).
+    point_indices : (k,) int
+        Rows of the input file that belong to the object.
+    parts : list of dict
+        The planes assigned to the label's parts.
+    cluster : int
+        Index of the cluster in the segmentation.
+    """
+
+    id: int
+    label: str
+    score: float
+    probabilities: Mapping[str, float]
+    costs: Mapping[str, float]
+    center: NDArray[np.float64]
+    size: NDArray[np.float64]
+    yaw: float
+    point_indices: NDArray[np.int64]
+    parts: list[dict[str, Any]]
+    cluster: int
+    cad: dict[str, Any] | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        out: dict[str, Any] = {
+            "id": self.id,
+            "label": self.label,
+            "score": round(self.score, 4),
+            "probabilities": {k: round(v, 4) for k, v in self.probabilities.items()},
+            "costs": {k: round(v, 4) for k, v in self.costs.items()},
+            "box": {"center": [round(float(v), 4) for v in self.center],
+                    "size": [round(float(v), 4) for v in self.size],
+                    "yaw": round(self.yaw, 4)},
+            "point_indices": [int(i) for i in self.point_indices],
+            "parts": self.parts,
+            "cluster": self.cluster,
+        }
+        if self.cad is not None:
+            out["cad"] = self.cad
+        return out
+
+
+@dataclass
+class Result:
+    """What :func:`detect` found, and how.
+
+    Attributes
+    ----------
+    cloud : PointCloud
+        The input.
+    detections : list of Detection
+    segmentation : Segmentation
+        Clusters with their planes (levelled frame).
+    scores : list of ClusterScores
+        One per cluster: every class's probability and factors.
+    choices : list of LabelChoice
+        One per cluster: the label (or none) and the costs.
+    ontology : Ontology
+    priors : dict of str to float
+        P_obj per class.
+    timings : dict of str to float
+        Seconds per stage.
+    """
+
+    cloud: PointCloud
+    detections: list[Detection]
+    segmentation: Segmentation
+    scores: list[ClusterScores]
+    choices: list[LabelChoice]
+    ontology: Ontology
+    priors: dict[str, float]
+    timings: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def frame(self) -> dict[str, Any]:
+        prep = self.segmentation.prepared
+        return {"up": [round(float(v), 6) for v in prep.up],
+                "ground_z": round(float(prep.floor_z), 6),
+                "scale": round(float(prep.scale), 9)}
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``detections.json`` document (DESIGN.md contract)."""
+        return {
+            "format": DETECTIONS_FORMAT,
+            "source": str(self.cloud.meta.get("source", "")),
+            "num_points": int(self.cloud.index.max() + 1) if len(self.cloud) else 0,
+            "frame": self.frame,
+            "detections": [d.to_dict() for d in self.detections],
+            "priors": {k: round(v, 4) for k, v in self.priors.items()},
+            "timings": {k: round(v, 4) for k, v in self.timings.items()},
+        }
+
+    def point_labels(self) -> tuple[NDArray[np.int32], NDArray[np.int32]]:
+        """Per point of :attr:`cloud`: class index into :attr:`class_names` (-1 none) and
+        detection id (0 none)."""
+        n = len(self.cloud)
+        label = np.full(n, -1, dtype=np.int32)
+        instance = np.zeros(n, dtype=np.int32)
+        names = self.class_names
+        for d in self.detections:
+            members = self.segmentation[d.cluster].point_indices
+            label[members] = names.index(d.label)
+            instance[members] = d.id
+        return label, instance
+
+    @property
+    def class_names(self) -> list[str]:
+        return sorted({c.label for c in self.ontology.classes})
+
+
+def describe_cluster(cluster: Cluster) -> ClusterDescription:
+    """What the ontology scoring needs to know about a cluster."""
+    return ClusterDescription(
+        planes=cluster.planes,
+        relations=cluster.relations_by_pair,
+        length=cluster.length,
+        breadth=cluster.breadth,
+        height=cluster.height,
+        bottom=cluster.bottom,
+    )
+
+
+def _to_input_frame(seg: Segmentation, cluster: Cluster) -> tuple[NDArray, NDArray, float]:
+    prep = seg.prepared
+    box = cluster.box
+    center = prep.from_level(np.asarray(box.center, dtype=np.float64)[None])[0]
+    rot = prep.to_level[:3, :3] / prep.scale
+    direction = rot.T @ np.array([math.cos(box.yaw), math.sin(box.yaw), 0.0])
+    yaw = math.atan2(direction[1], direction[0])
+    return center, np.asarray(box.size, dtype=np.float64) / prep.scale, yaw
+
+
+def _parts(seg: Segmentation, cluster: Cluster, assignment: Mapping[str, int | None]
+           ) -> list[dict[str, Any]]:
+    prep = seg.prepared
+    rot = prep.to_level[:3, :3] / prep.scale
+    counts = prep.counts
+    out = []
+    for name, k in assignment.items():
+        if k is None:
+            continue
+        plane = cluster.planes[k]
+        normal = rot.T @ np.asarray(plane.normal, dtype=np.float64)
+        centroid = prep.from_level(np.asarray(plane.centroid, dtype=np.float64)[None])[0]
+        voxels = cluster.voxels[np.asarray(plane.inliers)]
+        out.append({
+            "name": name,
+            "normal": [round(float(v), 4) for v in normal],
+            "centroid": [round(float(v), 4) for v in centroid],
+            "extent": [round(float(plane.length) / prep.scale, 4),
+                       round(float(plane.width) / prep.scale, 4)],
+            "height": round(float(plane.height) / prep.scale, 4),
+            "tilt": round(float(plane.tilt), 2),
+            "num_points": int(counts[voxels].sum()),
+        })
+    return out
+
+
+def detect(
+    cloud: PointCloud,
+    *,
+    config: Config | None = None,
+    ontology: Ontology | None = None,
+    room: str | Mapping[str, float] | None = None,
+    indoor: float | None = None,
+    threshold: float = 0.15,
+    beta: float = 0.5,
+    none_likelihood: float = 0.05,
+    context: float = 0.0,
+    seed: int = 0,
+    up: str | Sequence[float] | None = None,
+    scale: float | None = None,
+) -> Result:
+    """Find the objects an ontology describes in a point cloud.
+
+    Parameters
+    ----------
+    cloud : PointCloud
+        The scan (any units and up direction the preparation can handle).
+    config : Config, optional
+        Parameters of every stage (defaults: Table 4.1).
+    ontology : Ontology, optional
+        Classes to look for; the built-in furniture ontology by default.
+    room : str or mapping, optional
+        Room category or distribution for the environment prior (Eq. 3.10).
+    indoor : float, optional
+        P(indoor) for the indoor/outdoor prior (Eq. 3.5).
+    threshold : float
+        Decision threshold on P_obj|ont (Table 4.1: 15 %).
+    beta : float
+        Weight of the class probability in the energy (γ = 1 − β).
+    none_likelihood : float
+        Likelihood of a cluster under "none of the classes".
+    context : float
+        Strength of the seat-near-table pairwise term (0: off).
+    seed : int
+        Seed of every random step.
+    up, scale :
+        Passed to the preparation (up direction, scale factor k_s).
+
+    Returns
+    -------
+    Result
+
+    Examples
+    --------
+    >>> from ontodetect.synth import synthesize            # doctest: +SKIP
+    >>> result = detect(synthesize("tiny", seed=1).cloud)  # doctest: +SKIP
+    >>> [d.label for d in result.detections]               # doctest: +SKIP
+    ['table', 'chair']
+    """
+    if not isinstance(cloud, PointCloud):
+        raise InvalidParameterError("cloud", "a PointCloud", type(cloud).__name__)
+    if not 0.0 < none_likelihood <= 1.0:
+        raise InvalidParameterError("none_likelihood", "a number in (0, 1]", none_likelihood)
+    ontology = ontology or builtin_ontology()
+    priors = class_priors(ontology, room, indoor)
+    timings: dict[str, float] = {}
+
+    t0 = time.perf_counter()
+    seg = segment(cloud, config, seed=seed, up=up, scale=scale)
+    timings["segment"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    scores: list[ClusterScores] = []
+    with progress("Scoring clusters", total=len(seg)) as advance:
+        for c in seg:
+            scores.append(score_cluster(describe_cluster(c), ontology, priors,
+                                        none_likelihood=none_likelihood))
+            advance(1)
+    timings["score"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    centers = (np.array([c.box.center for c in seg]) if len(seg) else np.zeros((0, 3)))
+    choices = label_clusters(scores, [c.planes for c in seg], ontology, beta=beta,
+                             threshold=threshold, centers=centers, context=context)
+    timings["label"] = time.perf_counter() - t0
+
+    found = []
+    for k, (c, s, choice) in enumerate(zip(seg, scores, choices)):
+        if choice.label is None:
+            continue
+        cls_name = choice.extra["class"]
+        center, size, yaw = _to_input_frame(seg, c)
+        found.append(Detection(
+            id=0, label=choice.label, score=float(s.probabilities[cls_name]),
+            probabilities={n: float(p) for n, p in s.probabilities.items() if n != "none"},
+            costs=dict(choice.costs), center=center, size=size, yaw=yaw,
+            point_indices=np.sort(cloud.index[c.point_indices]),
+            parts=_parts(seg, c, s.classes[cls_name].assignment), cluster=k,
+        ))
+    found.sort(key=lambda d: (-d.score, d.cluster))
+    detections = [Detection(**{**d.__dict__, "id": i + 1}) for i, d in enumerate(found)]
+    return Result(cloud=cloud, detections=detections, segmentation=seg, scores=scores,
+                  choices=choices, ontology=ontology, priors=priors, timings=timings)

@@ -1,0 +1,237 @@
+"""Voxel grid average: one point per occupied voxel, and the map back to every input point."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..errors import InvalidParameterError
+
+__all__ = ["VoxelGrid", "grouped_covariance", "voxel_keys", "voxelize"]
+
+#: Voxel keys are packed into one int64 with this many bits per axis (2**21 voxels a side:
+#: 40 km at 2 cm), so that grouping is a single integer sort.
+KEY_BITS = 21
+KEY_LIMIT = 1 << KEY_BITS
+
+
+@dataclass(frozen=True, eq=False)
+class VoxelGrid:
+    """Points grouped by voxel, with the grid average of each voxel.
+
+    Attributes
+    ----------
+    size : float
+        Voxel edge.
+    origin : (3,) float
+        Corner of voxel (0, 0, 0).
+    keys : (m, 3) int64
+        Integer coordinates of every occupied voxel.
+    centers : (m, 3) float
+        Centroid of the points in each voxel (the grid average).
+    colors : (m, 3) uint8 or None
+        Mean colour of each voxel.
+    counts : (m,) int64
+        Points per voxel.
+    point_to_voxel : (n,) int64
+        Voxel of every input point; -1 for points left out (``mask`` was False).
+    """
+
+    size: float
+    origin: NDArray[np.float64]
+    keys: NDArray[np.int64]
+    centers: NDArray[np.float64]
+    colors: NDArray[np.uint8] | None
+    counts: NDArray[np.int64]
+    point_to_voxel: NDArray[np.int64]
+
+    def __len__(self) -> int:
+        return int(self.counts.shape[0])
+
+    def subset(self, keep: ArrayLike) -> VoxelGrid:
+        """The grid without the voxels where ``keep`` is False; their points map to -1.
+
+        Examples
+        --------
+        >>> g = voxelize([[0, 0, 0], [1, 0, 0], [2, 0, 0]], 0.5)
+        >>> g.subset([True, False, True]).point_to_voxel.tolist()
+        [0, -1, 1]
+        """
+        mask = np.asarray(keep, dtype=bool)
+        new_index = np.full(len(self) + 1, -1, dtype=np.int64)
+        new_index[:-1][mask] = np.arange(int(mask.sum()))
+        return VoxelGrid(
+            self.size,
+            self.origin,
+            self.keys[mask],
+            self.centers[mask],
+            None if self.colors is None else self.colors[mask],
+            self.counts[mask],
+            new_index[self.point_to_voxel],
+        )
+
+    def points_of(self, voxels: ArrayLike) -> NDArray[np.int64]:
+        """Indices of the input points that fall in the given voxels, in input order.
+
+        Parameters
+        ----------
+        voxels : (k,) int or (m,) bool
+            Voxel indices or a mask over the voxels.
+
+        Examples
+        --------
+        >>> g = voxelize([[0.01, 0, 0], [0.5, 0, 0], [0.011, 0.001, 0]], 0.02)
+        >>> g.points_of([g.point_to_voxel[0]]).tolist()
+        [0, 2]
+        """
+        sel = np.asarray(voxels)
+        mask = np.zeros(len(self) + 1, dtype=bool)  # last slot: points without a voxel
+        if sel.dtype == bool:
+            mask[:-1] = sel
+        else:
+            mask[sel.astype(np.intp, copy=False)] = True
+        return np.flatnonzero(mask[self.point_to_voxel]).astype(np.int64)
+
+
+def voxel_keys(points: ArrayLike, size: float, origin: ArrayLike) -> NDArray[np.int64]:
+    """(n, 3) integer voxel coordinates ``floor((points - origin) / size)``."""
+    pts = np.asarray(points, dtype=np.float64)
+    return np.floor((pts - np.asarray(origin, dtype=np.float64)) / size).astype(np.int64)
+
+
+def _pack(keys: NDArray[np.int64]) -> NDArray[np.int64]:
+    # Keys are offset to be non-negative before packing.
+    return (keys[:, 0] << (2 * KEY_BITS)) | (keys[:, 1] << KEY_BITS) | keys[:, 2]
+
+
+def voxelize(
+    points: ArrayLike,
+    size: float,
+    colors: ArrayLike | None = None,
+    *,
+    mask: ArrayLike | None = None,
+    origin: ArrayLike | None = None,
+) -> VoxelGrid:
+    """Group points into cubic voxels and average each voxel (thesis §3.3, Alg. 1 step 3).
+
+    Parameters
+    ----------
+    points : (n, 3) float
+        Coordinates.
+    size : float
+        Voxel edge, > 0.
+    colors : (n, 3) uint8, optional
+        Colours, averaged per voxel.
+    mask : (n,) bool, optional
+        Points to use; the others get voxel -1.
+    origin : (3,) float, optional
+        Corner of voxel (0, 0, 0); the minimum corner of the used points by default.
+
+    Returns
+    -------
+    VoxelGrid
+        Voxels in increasing key order (x, then y, then z), so the result does
+        not depend on the order of the input points.
+
+    Examples
+    --------
+    >>> g = voxelize([[0.001, 0, 0], [0.003, 0, 0], [0.05, 0, 0]], 0.02)
+    >>> g.counts.tolist(), g.point_to_voxel.tolist()
+    ([2, 1], [0, 0, 1])
+    >>> g.centers[0].tolist()
+    [0.002, 0.0, 0.0]
+    """
+    pts = np.asarray(points, dtype=np.float64)
+    if pts.ndim != 2 or pts.shape[1] != 3:
+        raise InvalidParameterError("points", "an array of shape (n, 3)", f"shape {pts.shape}")
+    if not size > 0:
+        raise InvalidParameterError("size", "a float in the range (0, inf)", size)
+    n = len(pts)
+    use = np.ones(n, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
+    if use.shape != (n,):
+        raise InvalidParameterError("mask", f"a boolean array of shape ({n},)", use.shape)
+    sel = pts if mask is None else pts[use]
+    if origin is None:
+        org = sel.min(axis=0) if len(sel) else np.zeros(3)
+    else:
+        org = np.asarray(origin, dtype=np.float64).reshape(3)
+    keys = voxel_keys(sel, size, org)
+    point_to_voxel = np.full(n, -1, dtype=np.int64)
+    if len(sel) == 0:
+        return VoxelGrid(
+            float(size),
+            org,
+            np.zeros((0, 3), np.int64),
+            np.zeros((0, 3)),
+            None if colors is None else np.zeros((0, 3), np.uint8),
+            np.zeros(0, np.int64),
+            point_to_voxel,
+        )
+    low = keys.min(axis=0)
+    shifted = keys - low
+    if int(shifted.max()) >= KEY_LIMIT:
+        raise InvalidParameterError(
+            "size",
+            f"large enough for at most {KEY_LIMIT} voxels along an axis",
+            f"{size} over an extent of {float(np.ptp(sel, axis=0).max()):.4g}",
+        )
+    unique, inverse, counts = np.unique(_pack(shifted), return_inverse=True, return_counts=True)
+    inverse = inverse.reshape(-1)
+    m = len(unique)
+    centers = np.empty((m, 3))
+    for a in range(3):
+        centers[:, a] = np.bincount(inverse, weights=sel[:, a], minlength=m)
+    centers /= counts[:, None]
+    ukeys = np.empty((m, 3), dtype=np.int64)
+    ukeys[:, 0] = unique >> (2 * KEY_BITS)
+    ukeys[:, 1] = (unique >> KEY_BITS) & (KEY_LIMIT - 1)
+    ukeys[:, 2] = unique & (KEY_LIMIT - 1)
+    ukeys += low
+    mean_colors = None
+    if colors is not None:
+        col = np.asarray(colors)
+        col = col if mask is None else col[use]
+        mean_colors = np.empty((m, 3), dtype=np.uint8)
+        for a in range(3):
+            s = np.bincount(inverse, weights=col[:, a].astype(np.float64), minlength=m)
+            mean_colors[:, a] = np.clip(np.rint(s / counts), 0, 255).astype(np.uint8)
+    point_to_voxel[use] = inverse
+    return VoxelGrid(
+        float(size), org, ukeys, centers, mean_colors, counts.astype(np.int64), point_to_voxel
+    )
+
+
+def grouped_covariance(
+    points: NDArray[np.float64], groups: NDArray[np.int64], num_groups: int
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
+    """Mean and covariance of the points of every group, in one pass of sums.
+
+    Parameters
+    ----------
+    points : (n, 3) float
+    groups : (n,) int
+        Group of every point, in ``0..num_groups-1``.
+    num_groups : int
+
+    Returns
+    -------
+    means : (g, 3) float
+    covariances : (g, 3, 3) float
+    counts : (g,) int
+    """
+    counts = np.bincount(groups, minlength=num_groups)
+    safe = np.maximum(counts, 1)[:, None]
+    means = np.stack([np.bincount(groups, points[:, a], num_groups) for a in range(3)], 1)
+    means /= safe
+    # Centre on the group mean before the products: sums of raw squares lose precision
+    # far from the origin.
+    d = points - means[groups]
+    cov = np.empty((num_groups, 3, 3))
+    for a in range(3):
+        for b in range(a, 3):
+            v = np.bincount(groups, d[:, a] * d[:, b], num_groups) / safe[:, 0]
+            cov[:, a, b] = v
+            cov[:, b, a] = v
+    return means, cov, counts

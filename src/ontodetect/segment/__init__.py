@@ -1,0 +1,55 @@
+"""Candidate object clusters and their planes (thesis §3.3, Algorithm 1 steps 7–9).
+
+:func:`segment` prepares a scan and clusters it in one call; :func:`cluster` works on
+a :class:`~ontodetect.preprocess.PreparedScene`. Clustering runs on the voxel grid:
+DBSCAN, Euclidean clustering or smooth region growing (:func:`dbscan`,
+:func:`euclidean_clusters`, :func:`region_growing`), or, by default, density
+regions split around seat and table-top hypotheses (:func:`horizontal_parts`,
+:func:`seeded_clusters`), which keeps chairs tucked under a table apart from it.
+Every cluster gets its MSAC planes (``ontodetect.segment.planes``) and the relations
+between them, an upright box, and flags when it breaks the limits of Table 4.1.
+"""
+
+from __future__ import annotations
+
+from ._cluster import (
+    core_neighbors,
+    dbscan,
+    euclidean_clusters,
+    radius_graph,
+    region_growing,
+    relabel,
+)
+from ._parts import PartSeed, horizontal_parts, seeded_clusters
+from ._segmentation import (
+    FLAGS,
+    Box,
+    Cluster,
+    Segmentation,
+    cluster,
+    effective_radius,
+    plane_to_dict,
+    segment,
+    upright_box,
+)
+
+__all__ = [
+    "FLAGS",
+    "Box",
+    "Cluster",
+    "PartSeed",
+    "Segmentation",
+    "cluster",
+    "core_neighbors",
+    "dbscan",
+    "effective_radius",
+    "euclidean_clusters",
+    "horizontal_parts",
+    "plane_to_dict",
+    "radius_graph",
+    "region_growing",
+    "relabel",
+    "seeded_clusters",
+    "segment",
+    "upright_box",
+]

@@ -1,0 +1,478 @@
+"""Part-driven clustering: density regions split around seat and table-top hypotheses.
+
+Plain density clustering cannot isolate furniture in a crowded room: at a small
+radius a sparse chair falls apart, at a larger one it merges with the table it is
+tucked under. Top-down knowledge helps (the thesis's point): seats and table tops
+are horizontal patches at known heights, and every other part of a chair, sofa or
+table hangs from one - legs below it, a backrest above its back edge, armrests
+beside it - within a short distance of its outline. So:
+
+1. horizontal patches at part height (Table 4.1: seats at 35–75 cm; table tops a
+   little higher), flat and at least as wide as a seat, are found; touching patches
+   at one height (sofa cushions) are one part, and narrow patches a little above a
+   seat within its outline (armrests, the top of a sofa's back) join it; each part
+   is a seed;
+2. each seed claims the voxels of its *prism* that it reaches along the surface
+   within a path length. A seat's prism is its outline grown by 30 cm, up to 80 cm
+   above it (backrest, legs, armrests); a top's is its outline grown by 5 cm below
+   it and the outline itself above it (legs and apron are under a table; the
+   backrest of a chair pushed against its edge is not the table). Where prisms
+   overlap (a chair tucked under a table) the voxel goes to the shorter path;
+   folding from one surface onto another costs extra, and so does every metre
+   outside a top's outline;
+3. what no seed claims forms connected pieces; pieces longer than a cluster may be
+   are split again with shorter links (walls with doors and shelves link a whole
+   room), and pieces lying mostly in a part's prism next to its cluster (a backrest
+   or a swivel base cut off by a gap in a sparse scan) join it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy import sparse
+from scipy.sparse.csgraph import connected_components, dijkstra
+from scipy.spatial import cKDTree
+
+from ._cluster import relabel
+
+__all__ = ["PartSeed", "horizontal_parts", "seeded_clusters"]
+
+#: Table 4.1: height of seating plane 35–75 cm; parts above are table tops.
+SEAT_TOP = 0.75
+#: Extra cost of a step between neighbours whose normals differ, per unit of
+#: (1 - |cos angle|): moving from a seat onto the table beside it crosses folds.
+FOLD_PENALTY = 2.0
+#: Horizontal parts may lie this much (m) outside ``part_height`` (a sagging cushion,
+#: a floor height map a few centimetres off).
+HEIGHT_MARGIN = 0.03
+#: Voxels whose neighbourhood is less flat than this (smallest eigenvalue over the sum)
+#: are edges or corners and do not belong to a horizontal part.
+MAX_PART_VARIATION = 0.08
+#: Patches at heights within this (m) and this close (m) are one part (sofa cushions,
+#: the two leaves of a table).
+MERGE_STEP = 0.05
+MERGE_GAP = 0.06
+#: A part claims voxels up to this far (m) outside its outline: a seat's backrest leans
+#: back, its legs splay, armrests stand beside it; a table's legs and apron stand under
+#: its top, so what is beside the top (the backrest of a chair pushed against its
+#: edge) is not the table.
+SEAT_MARGIN = 0.3
+TOP_MARGIN = 0.05
+#: Within the margin, every metre outside the outline costs this much path length: a
+#: seat's parts may stick out, a table's hardly.
+SEAT_OUTSIDE_COST = 0.5
+TOP_OUTSIDE_COST = 20.0
+#: Heights within this (m) above a part count as the part itself (noise, thickness);
+#: above a top, only what lies this far inside its outline is the table's.
+ABOVE_TOLERANCE = 0.02
+#: A part's object reaches up to this high (m) above it: a seat carries a backrest;
+#: what stands on a table top (monitors, lamps, shelves) is not the table.
+SEAT_RISE = 0.8
+TOP_RISE = 0.15
+#: A fragment no part reached joins a part's cluster when it is this close (m) to it
+#: and at least this share of it lies in the part's prism.
+JOIN_DISTANCE = 0.25
+JOIN_SHARE = 0.6
+#: A part 10–45 cm above a seat, narrower than this (m) and mostly within the seat's
+#: outline grown by ``ARM_MARGIN``, is an armrest or the top of a backrest (sofas).
+ARM_RISE = (0.1, 0.45)
+ARM_WIDTH = 0.6
+ARM_MARGIN = 0.25
+ARM_SHARE = 0.7
+#: Long regions are split by dividing the longest link they keep by this, repeatedly.
+SPLIT_STEP = 1.25
+
+
+@dataclass(frozen=True)
+class PartSeed:
+    """A horizontal patch at part height that seeds a cluster.
+
+    Attributes
+    ----------
+    voxels : (k,) int
+        Indices (into the clustered voxels) of the patch.
+    height : float
+        Median height above the floor (m).
+    area : float
+        Estimated surface (m²).
+    center : (2,) float
+        Centre of its horizontal box.
+    axes : (2, 2) float
+        Rows: direction of the long and the short side.
+    extent : (2,) float
+        Long and short side of its horizontal box (m).
+    """
+
+    voxels: NDArray[np.int64]
+    height: float
+    area: float
+    center: NDArray[np.float64]
+    axes: NDArray[np.float64]
+    extent: NDArray[np.float64]
+
+    @property
+    def kind(self) -> str:
+        """ "seat" at seat height (Table 4.1: 35–75 cm), "top" above it."""
+        return "seat" if self.height <= SEAT_TOP else "top"
+
+    @property
+    def rise(self) -> float:
+        """How high (m) above the part its object may reach."""
+        return SEAT_RISE if self.kind == "seat" else TOP_RISE
+
+    @property
+    def margin(self) -> float:
+        """How far (m) outside the part's outline its object may reach."""
+        return SEAT_MARGIN if self.kind == "seat" else TOP_MARGIN
+
+    @property
+    def outside_cost(self) -> float:
+        """Extra path cost per metre a voxel lies outside the outline."""
+        return SEAT_OUTSIDE_COST if self.kind == "seat" else TOP_OUTSIDE_COST
+
+    def outside(self, points: NDArray[np.float64], signed: bool = False) -> NDArray[np.float64]:
+        """(k,) float: horizontal distance (m) of points outside the outline.
+
+        0 inside, or with ``signed`` minus the distance to the nearest side.
+        """
+        d = np.abs((points[:, :2] - self.center) @ self.axes.T) - self.extent / 2
+        out = np.linalg.norm(np.maximum(d, 0.0), axis=1)
+        if signed:
+            out = np.where(out > 0, out, d.max(axis=1))
+        return out
+
+    def in_prism(
+        self, points: NDArray[np.float64], margin: float | None = None
+    ) -> NDArray[np.bool_]:
+        """(k,) bool: points within ``margin`` of the outline and below ``height + rise``.
+
+        Above a table top only its outline counts: what stands beside it and rises
+        above it (a chair's backrest against its edge) is something else.
+        """
+        margin = self.margin if margin is None else margin
+        out = self.outside(points, signed=True)
+        above = points[:, 2] > self.height + ABOVE_TOLERANCE
+        # The outline of a patch is known to about a voxel: above a top, only what is
+        # clearly inside it counts.
+        allowed = np.where(above & (self.kind == "top"), -ABOVE_TOLERANCE, margin)
+        return (out <= allowed) & (points[:, 2] <= self.height + self.rise)
+
+    def to_dict(self) -> dict:
+        return {
+            "kind": self.kind,
+            "height": round(self.height, 4),
+            "area": round(self.area, 4),
+            "center": [round(float(v), 4) for v in self.center],
+            "extent": [round(float(v), 4) for v in self.extent],
+            "num_voxels": len(self.voxels),
+        }
+
+
+def _outline(xy: NDArray[np.float64]):
+    if len(xy) < 3:
+        c = xy.mean(axis=0) if len(xy) else np.zeros(2)
+        return c, np.eye(2), np.zeros(2)
+    mu = xy.mean(axis=0)
+    d = xy - mu
+    _, vecs = np.linalg.eigh(d.T @ d)
+    axes = vecs[:, ::-1].T  # long side first
+    proj = d @ axes.T
+    lo, hi = proj.min(axis=0), proj.max(axis=0)
+    center = mu + ((lo + hi) / 2) @ axes
+    return center, axes, hi - lo
+
+
+def _seed(vox, centers, voxel_area) -> PartSeed:
+    c, axes, ext = _outline(centers[vox, :2])
+    return PartSeed(
+        np.sort(vox).astype(np.int64),
+        float(np.median(centers[vox, 2])),
+        float(len(vox) * voxel_area),
+        c,
+        axes,
+        ext,
+    )
+
+
+def horizontal_parts(
+    centers: NDArray[np.float64],
+    normals: NDArray[np.float64],
+    graph: sparse.csr_matrix,
+    *,
+    height: tuple[float, float],
+    tilt: float,
+    max_step: float,
+    min_area: float,
+    min_width: float,
+    voxel_area: float,
+    variation: NDArray[np.float64] | None = None,
+) -> list[PartSeed]:
+    """Horizontal patches at part height, largest first.
+
+    Parameters
+    ----------
+    centers : (m, 3) float
+        Voxel centres, levelled (z = height above the floor).
+    normals : (m, 3) float
+        Voxel normals.
+    graph : sparse (m, m)
+        Neighbour graph of the voxels.
+    height : (float, float)
+        Heights (m) where parts are sought.
+    tilt : float
+        Largest angle (deg) between a voxel normal and vertical.
+    max_step : float
+        Largest height difference (m) between neighbours of one patch.
+    min_area : float
+        Smallest patch surface (m²).
+    min_width : float
+        Smallest short side (m): armrests and the top rails of backrests are
+        narrower than any seat or table top.
+    voxel_area : float
+        Surface (m²) one voxel stands for.
+    variation : (m,) float, optional
+        Surface variation of each voxel's neighbourhood (see ``estimate_normals``):
+        voxels on edges and corners, whose normals are a blend, do not seed parts.
+    """
+    z = centers[:, 2]
+    flat = (
+        (np.abs(normals[:, 2]) >= np.cos(np.radians(tilt)))
+        & (z >= height[0] - HEIGHT_MARGIN)
+        & (z <= height[1] + HEIGHT_MARGIN)
+    )
+    if variation is not None:
+        flat &= variation <= MAX_PART_VARIATION
+    m = len(centers)
+    coo = graph.tocoo()
+    keep = flat[coo.row] & flat[coo.col] & (np.abs(z[coo.row] - z[coo.col]) <= max_step)
+    g = sparse.csr_matrix((np.ones(int(keep.sum())), (coo.row[keep], coo.col[keep])), shape=(m, m))
+    _, comp = connected_components(g, directed=False)
+    comp = relabel(np.where(flat, comp, -1))
+    patches = _groups(comp)
+    # Patches at one height that (nearly) touch are one part: cushions of a sofa.
+    patches = _merge_close(patches, centers)
+    seeds = [_seed(p, centers, voxel_area) for p in patches]
+    seeds = [s for s in seeds if s.area >= min_area and s.extent[1] >= min_width]
+    seeds = _merge_armrests(seeds, centers, voxel_area)
+    seeds.sort(key=lambda s: (-s.area, int(s.voxels[0])))
+    return seeds
+
+
+def _merge_armrests(seeds: list[PartSeed], centers, voxel_area) -> list[PartSeed]:
+    """Narrow parts a little above a seat and within its prism are its armrests or back top."""
+    seeds = sorted(seeds, key=lambda s: (-s.area, int(s.voxels[0])))
+    merged: dict[int, list[int]] = {}
+    taken = set()
+    for i, low in enumerate(seeds):
+        if low.kind != "seat" or i in taken:
+            continue
+        for j, high in enumerate(seeds):
+            if j == i or j in taken or j in merged:
+                continue
+            rise = high.height - low.height
+            if not ARM_RISE[0] <= rise <= ARM_RISE[1] or high.extent[1] > ARM_WIDTH:
+                continue
+            if np.mean(low.in_prism(centers[high.voxels], margin=ARM_MARGIN)) >= ARM_SHARE:
+                merged.setdefault(i, []).append(j)
+                taken.add(j)
+    out = []
+    for i, sd in enumerate(seeds):
+        if i in taken:
+            continue
+        if i in merged:
+            vox = np.concatenate([sd.voxels] + [seeds[j].voxels for j in merged[i]])
+            grown = _seed(vox, centers, voxel_area)
+            # Keep the seat's own height and outline: the armrests only join its cluster.
+            sd = PartSeed(grown.voxels, sd.height, grown.area, sd.center, sd.axes, sd.extent)
+        out.append(sd)
+    return out
+
+
+def _groups(labels: NDArray[np.int64]) -> list[NDArray[np.int64]]:
+    valid = labels >= 0
+    if not valid.any():
+        return []
+    idx = np.flatnonzero(valid)
+    order = np.argsort(labels[idx], kind="stable")
+    idx = idx[order]
+    cuts = np.flatnonzero(np.diff(labels[idx])) + 1
+    return np.split(idx, cuts)
+
+
+def _merge_close(patches: list[NDArray[np.int64]], centers: NDArray[np.float64]):
+    if len(patches) < 2:
+        return patches
+    heights = np.array([np.median(centers[p, 2]) for p in patches])
+    owner = np.concatenate([np.full(len(p), k) for k, p in enumerate(patches)])
+    allv = np.concatenate(patches)
+    pairs = cKDTree(centers[allv]).query_pairs(MERGE_GAP, output_type="ndarray")
+    if len(pairs) == 0:
+        return patches
+    a, b = owner[pairs[:, 0]], owner[pairs[:, 1]]
+    ok = (a != b) & (np.abs(heights[a] - heights[b]) <= MERGE_STEP)
+    if not ok.any():
+        return patches
+    k = len(patches)
+    g = sparse.csr_matrix((np.ones(int(ok.sum())), (a[ok], b[ok])), shape=(k, k))
+    _, comp = connected_components(g, directed=False)
+    merged = {}
+    for i, c in enumerate(comp):
+        merged.setdefault(int(c), []).append(patches[i])
+    return [np.concatenate(v) for _, v in sorted(merged.items())]
+
+
+def seeded_clusters(
+    centers: NDArray[np.float64],
+    normals: NDArray[np.float64],
+    graph: sparse.csr_matrix,
+    core: NDArray[np.bool_],
+    seeds: list[PartSeed],
+    *,
+    max_grow: float,
+    max_length: float = np.inf,
+    min_radius: float = 0.0,
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """Give voxels to the seed closest along the surface within its prism; the rest to regions.
+
+    Parameters
+    ----------
+    centers, normals : (m, 3) float
+    graph : sparse (m, m)
+        Neighbour graph with distances.
+    core : (m,) bool
+        DBSCAN core voxels: only they carry paths (border voxels join their
+        nearest core neighbour; voxels with neither are noise).
+    seeds : list of PartSeed
+    max_grow : float
+        Longest path (m) from a seed.
+    max_length : float
+        Regions no part claimed that are longer than this (m) are split again with
+        ever shorter links (down to ``min_radius``): walls with doors, curtains
+        and shelves link a whole room, and whatever touches them.
+    min_radius : float
+        Shortest link (m) when splitting long regions.
+
+    Returns
+    -------
+    labels : (m,) int
+        Cluster per voxel, -1 for noise; clusters numbered largest first.
+    seed_of_cluster : (k,) int
+        For each cluster, the seed it grew from, or -1 for a region without a part.
+    """
+    m = len(centers)
+    coo = graph.tocoo()
+    both = core[coo.row] & core[coo.col]
+    r, c, d = coo.row[both], coo.col[both], coo.data[both]
+    cos = np.abs((normals[r] * normals[c]).sum(axis=1))
+    w = d * (1.0 + FOLD_PENALTY * (1.0 - cos))
+    g = sparse.csr_matrix((w, (r, c)), shape=(m, m))
+
+    best = np.full(m, np.inf)
+    labels = np.full(m, -1, dtype=np.int64)
+    xy_tree = cKDTree(centers[:, :2]) if m else None
+    for k, s in enumerate(seeds):
+        reach = float(np.hypot(*(s.extent / 2 + s.margin)))
+        near = np.asarray(xy_tree.query_ball_point(s.center, reach), dtype=np.int64)
+        near = np.sort(near[core[near]])
+        near = near[s.in_prism(centers[near])]
+        src = np.flatnonzero(np.isin(near, s.voxels))
+        if len(src) == 0:
+            continue
+        sub = g[near][:, near]
+        dist = dijkstra(sub, directed=False, indices=src, min_only=True, limit=max_grow)
+        dist = dist + s.outside_cost * s.outside(centers[near])
+        better = dist < best[near]
+        best[near[better]] = dist[better]
+        labels[near[better]] = k
+    n_seeds = len(seeds)
+    # Core voxels no seed claimed: connected pieces of what is left.
+    rest = core & (labels < 0)
+    if rest.any():
+        keep = rest[r] & rest[c]
+        rg = sparse.csr_matrix((np.ones(int(keep.sum())), (r[keep], c[keep])), shape=(m, m))
+        _, comp = connected_components(rg, directed=False)
+        comp_rest = relabel(np.where(rest, comp, -1))
+        comp_rest = _split_long(
+            comp_rest, centers, r[keep], c[keep], d[keep], max_length, min_radius
+        )
+        labels[rest] = comp_rest[rest] + n_seeds
+        _join_fragments(labels, centers, seeds, n_seeds)
+    # Border voxels: nearest labelled core neighbour.
+    border = (~core[coo.row]) & core[coo.col] & (labels[coo.col] >= 0)
+    if border.any():
+        br, bc, bd = coo.row[border], coo.col[border], coo.data[border]
+        order = np.lexsort((bc, bd, br))
+        br, bc = br[order], bc[order]
+        first = np.r_[True, br[1:] != br[:-1]]
+        labels[br[first]] = labels[bc[first]]
+    final = relabel(labels)
+    k = int(final.max()) + 1 if (final >= 0).any() else 0
+    seed_of = np.full(k, -1, dtype=np.int64)
+    has = final >= 0
+    pairs = np.unique(np.c_[final[has], labels[has]], axis=0)
+    seed_of[pairs[:, 0]] = np.where(pairs[:, 1] < n_seeds, pairs[:, 1], -1)
+    return final, seed_of
+
+
+def _longest_side(xy: NDArray[np.float64]) -> float:
+    if len(xy) < 2:
+        return 0.0
+    d = xy - xy.mean(axis=0)
+    _, vecs = np.linalg.eigh(d.T @ d)
+    return float(np.ptp(d @ vecs, axis=0).max())
+
+
+def _split_long(labels, centers, r, c, d, max_length, min_radius):
+    """Split groups longer than ``max_length`` by dropping their longest links, repeatedly."""
+    if not np.isfinite(max_length):
+        return labels
+    labels = labels.copy()
+    m = len(labels)
+    next_id = int(labels.max()) + 1 if (labels >= 0).any() else 0
+    todo = [(g, float(d.max()) if len(d) else 0.0) for g in _groups(labels)]
+    while todo:
+        group, link = todo.pop()
+        if _longest_side(centers[group, :2]) <= max_length:
+            continue
+        link /= SPLIT_STEP
+        if link < min_radius:
+            continue
+        inside = np.zeros(m, dtype=bool)
+        inside[group] = True
+        keep = inside[r] & inside[c] & (d <= link)
+        g = sparse.csr_matrix((np.ones(int(keep.sum())), (r[keep], c[keep])), shape=(m, m))
+        _, comp = connected_components(g, directed=False)
+        parts = _groups(relabel(np.where(inside, comp, -1)))
+        for k, part in enumerate(parts):
+            if k > 0:
+                labels[part] = next_id
+                next_id += 1
+            todo.append((part, link))
+    return relabel(labels)
+
+
+def _join_fragments(labels, centers, seeds, n_seeds) -> None:
+    """Fragments lying mostly in a part's prism, close to its cluster, join that cluster."""
+    claimed = labels >= 0
+    seeded = claimed & (labels < n_seeds)
+    if not seeded.any():
+        return
+    tree = cKDTree(centers[seeded])
+    owner = labels[seeded]
+    for frag in _groups(np.where(labels >= n_seeds, labels, -1)):
+        dist, idx = tree.query(centers[frag], k=1, distance_upper_bound=JOIN_DISTANCE)
+        hit = np.isfinite(dist)
+        if not hit.any():
+            continue
+        candidates = np.unique(owner[idx[hit]])
+        best, best_d = -1, np.inf
+        for k in candidates:
+            share = float(np.mean(seeds[k].in_prism(centers[frag])))
+            dk = float(dist[hit][owner[idx[hit]] == k].min())
+            if share >= JOIN_SHARE and dk < best_d:
+                best, best_d = int(k), dk
+        if best >= 0:
+            labels[frag] = best

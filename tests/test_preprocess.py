@@ -1,0 +1,330 @@
+"""Preparation: voxel grid and index map, denoising, gravity and floor, structure, scale."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from ontodetect import DataWarning, point_cloud
+from ontodetect.config import Config
+from ontodetect.errors import InvalidParameterError
+from ontodetect.preprocess import (
+    PreparedScene,
+    denoise,
+    estimate_normals,
+    estimate_up,
+    far_outlier_mask,
+    find_floor,
+    guess_scale,
+    level_transform,
+    manhattan_axes,
+    prepare,
+    radius_outlier_mask,
+    rotation_between,
+    scale_from_travel,
+    smooth_surface,
+    statistical_outlier_mask,
+    voxelize,
+)
+
+
+# -- generated scenes ----------------------------------------------------------------------
+def rect(rng, corner, u, v, spacing, noise=0.002):
+    """Jittered grid on the parallelogram corner + s u + t v, s, t in [0, 1]."""
+    corner, u, v = (np.asarray(a, dtype=float) for a in (corner, u, v))
+    nu = max(2, int(np.linalg.norm(u) / spacing))
+    nv = max(2, int(np.linalg.norm(v) / spacing))
+    s, t = np.meshgrid((np.arange(nu) + rng.random(nu)) / nu, (np.arange(nv) + rng.random(nv)) / nv)
+    pts = corner + s.reshape(-1, 1) * u + t.reshape(-1, 1) * v
+    return pts + rng.normal(0, noise, pts.shape)
+
+
+def box(rng, lo, hi, spacing):
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    d = hi - lo
+    ex, ey, ez = np.diag(d)
+    # No bottom face: scanners never see the underside of furniture.
+    faces = [(lo + ez, ex, ey), (lo, ex, ez), (lo + ey, ex, ez), (lo, ey, ez), (lo + ex, ey, ez)]
+    return np.vstack([rect(rng, c, u, v, spacing) for c, u, v in faces])
+
+
+def room(rng, spacing=0.03, size=(4.0, 3.0), height=2.5, ceiling=False):
+    """Floor, four walls and two pieces of furniture; z up, floor at 0. Returns points, kinds."""
+    w, d = size
+    parts = {
+        "floor": rect(rng, (0, 0, 0), (w, 0, 0), (0, d, 0), spacing),
+        "wall": np.vstack(
+            [
+                rect(rng, (0, 0, 0), (w, 0, 0), (0, 0, height), spacing),
+                rect(rng, (0, d, 0), (w, 0, 0), (0, 0, height), spacing),
+                rect(rng, (0, 0, 0), (0, d, 0), (0, 0, height), spacing),
+                rect(rng, (w, 0, 0), (0, d, 0), (0, 0, height), spacing),
+            ]
+        ),
+        "furniture": np.vstack(
+            [
+                box(rng, (1.0, 1.0, 0.0), (2.2, 1.8, 0.75), spacing / 1.5),
+                box(rng, (2.8, 0.8, 0.0), (3.3, 1.3, 0.45), spacing / 1.5),
+            ]
+        ),
+    }
+    if ceiling:
+        parts["ceiling"] = rect(rng, (0, 0, height), (w, 0, 0), (0, d, 0), spacing)
+    pts = np.vstack(list(parts.values()))
+    kinds = np.concatenate([np.full(len(v), k) for k, v in parts.items()])
+    return pts, kinds
+
+
+def transform(points, R, t):
+    return points @ np.asarray(R).T + np.asarray(t)
+
+
+# -- voxel grid ----------------------------------------------------------------------------
+def test_every_point_maps_to_the_voxel_containing_it(rng):
+    pts = rng.random((5000, 3)) * [2.0, 1.0, 0.5] - 0.3
+    g = voxelize(pts, 0.05)
+    keys = np.floor((pts - g.origin) / g.size).astype(np.int64)
+    assert np.array_equal(g.keys[g.point_to_voxel], keys)
+    assert g.counts.sum() == len(pts)
+    assert np.array_equal(np.bincount(g.point_to_voxel), g.counts)
+    # Centres are the means of their points and lie in their voxel.
+    for a in range(3):
+        mean = np.bincount(g.point_to_voxel, pts[:, a]) / g.counts
+        assert np.allclose(g.centers[:, a], mean)
+    assert np.all(np.floor((g.centers - g.origin) / g.size) == g.keys)
+    # points_of is the inverse of the map, in input order.
+    for v in (0, len(g) // 2, len(g) - 1):
+        assert np.array_equal(g.points_of([v]), np.flatnonzero(g.point_to_voxel == v))
+
+
+def test_voxelize_colors_mask_and_order(rng):
+    pts = rng.random((2000, 3))
+    cols = rng.integers(0, 256, (2000, 3)).astype(np.uint8)
+    mask = rng.random(2000) > 0.3
+    g = voxelize(pts, 0.1, cols, mask=mask)
+    assert np.all(g.point_to_voxel[~mask] == -1)
+    assert g.counts.sum() == mask.sum()
+    v = g.point_to_voxel[mask][0]
+    members = mask & (g.point_to_voxel == v)
+    assert np.array_equal(g.colors[v], np.rint(cols[members].mean(0)).astype(np.uint8))
+    # The same voxels whatever the order of the points.
+    perm = rng.permutation(2000)
+    g2 = voxelize(pts[perm], 0.1, cols[perm], mask=mask[perm], origin=g.origin)
+    assert np.array_equal(g.keys, g2.keys) and np.allclose(g.centers, g2.centers)
+    assert np.array_equal(g.point_to_voxel[perm], g2.point_to_voxel)
+
+
+def test_voxelize_rejects_bad_input():
+    with pytest.raises(InvalidParameterError, match="'size'"):
+        voxelize(np.zeros((3, 3)), 0)
+    with pytest.raises(InvalidParameterError, match=r"'points'.*\(n, 3\)"):
+        voxelize(np.zeros((3, 2)), 0.1)
+    assert len(voxelize(np.zeros((0, 3)), 0.1)) == 0
+
+
+# -- denoising -----------------------------------------------------------------------------
+def test_outliers_at_known_indices_are_removed(rng):
+    surface = rect(rng, (0, 0, 0), (2, 0, 0), (0, 2, 0), 0.01)
+    specks = rng.random((20, 3)) * [2, 2, 0] + [0, 0, 0.5]  # isolated points above
+    far = np.array([[40.0, 0, 0], [0, -30, 2]])
+    pts = np.vstack([surface, specks, far])
+    n = len(surface)
+    keep = denoise(pts, voxel_size=0.02, method="both", radius=0.05)
+    assert keep[:n].mean() > 0.995
+    assert not keep[n:].any()
+    assert not far_outlier_mask(pts)[-2:].any()
+    assert statistical_outlier_mask(np.vstack([surface[::5], far]), 8, 2.0)[-2:].sum() == 0
+    assert not radius_outlier_mask(np.vstack([surface[::5], far]), 0.05)[-2:].any()
+    assert denoise(pts, method="none")[n : n + 20].all()  # no neighbourhood test
+
+
+def test_denoise_keeps_the_edges_of_clean_surfaces():
+    g = np.stack(np.meshgrid(np.arange(50), np.arange(50), [0]), -1).reshape(-1, 3) * 0.02
+    assert statistical_outlier_mask(g, 8, 1.0).all()
+
+
+def test_denoise_rejects_bad_method():
+    with pytest.raises(InvalidParameterError, match="'method'"):
+        denoise(np.zeros((4, 3)), method="median")
+
+
+# -- gravity and floor ---------------------------------------------------------------------
+def test_floor_found_when_not_at_zero(rng):
+    pts, kinds = room(rng)
+    scene = prepare(pts + [0.5, -1.0, 0.37])
+    assert scene.floor_found
+    assert scene.floor_z == pytest.approx(0.37, abs=0.01)
+    assert np.allclose(scene.up, [0, 0, 1], atol=1e-3)
+    z = scene.cloud.xyz[:, 2]
+    assert np.abs(z[kinds == "floor"]).max() < 0.02
+    top = scene.cloud.xyz[kinds == "furniture", 2].max()
+    assert top == pytest.approx(0.75, abs=0.02)
+
+
+def test_tilted_scan_is_levelled_on_its_floor(rng):
+    pts, kinds = room(rng)
+    R = Rotation.from_euler("xy", [6.0, -4.0], degrees=True).as_matrix()
+    scene = prepare(transform(pts, R, [0, 0, 1.2]), up="z")  # drifted map, floor not at 0
+    true_up = R @ [0, 0, 1]
+    assert np.degrees(np.arccos(scene.up @ true_up)) < 0.5
+    assert np.abs(scene.cloud.xyz[kinds == "floor", 2]).max() < 0.02
+    assert scene.cloud.xyz[kinds == "furniture", 2].max() == pytest.approx(0.75, abs=0.02)
+
+
+def test_camera_frame_up_is_estimated(rng):
+    pts, kinds = room(rng)
+    # A camera 1.3 m high looking along +x, pitched 20 degrees down: y down, z forward.
+    world_to_cam = Rotation.from_euler("x", 20, degrees=True).as_matrix() @ np.array(
+        [[0, -1, 0], [0, 0, -1], [1, 0, 0]], dtype=float
+    )
+    cam = transform(pts - [0.2, 1.5, 1.3], world_to_cam, [0, 0, 0])
+    cloud = point_cloud(cam, meta={"width": 640, "height": 480})
+    scene = prepare(cloud, up="auto")
+    true_up = world_to_cam @ [0, 0, 1]
+    assert np.degrees(np.arccos(scene.up @ true_up)) < 1.0
+    assert scene.floor_z == pytest.approx(-1.3, abs=0.02)
+    assert np.abs(scene.cloud.xyz[kinds == "floor", 2]).max() < 0.03
+
+
+def test_up_auto_on_an_unknown_frame(rng):
+    pts, _ = room(rng, ceiling=False)
+    R = Rotation.from_euler("zyx", [30, 70, 10], degrees=True).as_matrix()
+    up, confidence = estimate_up(transform(pts, R, [0, 0, 0]), hint=None)
+    assert np.degrees(np.arccos(up @ (R @ [0, 0, 1]))) < 1.0
+    assert 0 < confidence <= 1
+
+
+def test_no_floor_falls_back_with_a_warning(rng):
+    pts = box(rng, (0, 0, 1.0), (0.6, 0.6, 1.5), 0.01)  # a box floating in the air
+    with pytest.warns(DataWarning, match="no floor found"):
+        scene = prepare(pts)
+    assert not scene.floor_found
+    assert scene.cloud.xyz[:, 2].min() == pytest.approx(0.0, abs=0.01)
+
+
+def test_manhattan_axes_and_rotations():
+    R = Rotation.from_euler("zyx", [20, 10, 5], degrees=True).as_matrix()
+    normals = np.repeat(np.eye(3), [60, 30, 10], axis=0) @ R.T
+    axes = manhattan_axes(normals)
+    assert np.allclose(np.abs(axes @ R), np.eye(3), atol=1e-9)
+    for a, b in [([0, -1, 0], [0, 0, 1]), ([0, 0, -1], [0, 0, 1]), ([1, 2, 3], [0, 0, 1])]:
+        M = rotation_between(a, b)
+        assert np.allclose(M @ (np.array(a) / np.linalg.norm(a)), b)
+        assert np.allclose(M @ M.T, np.eye(3)) and np.linalg.det(M) == pytest.approx(1.0)
+    T = level_transform([0, 0, 1], 0.4, 2.0)
+    assert np.allclose(T @ [1, 1, 0.2, 1], [2, 2, 0, 1])
+
+
+def test_find_floor_on_arrays(rng):
+    pts, _ = room(rng)
+    fit = find_floor(pts + [0, 0, -0.25], [0, 0, 1])
+    assert fit.found and fit.offset == pytest.approx(-0.25, abs=0.01)
+    assert fit.area > 5.0
+
+
+# -- structure and search volume -----------------------------------------------------------
+def test_structure_and_object_mask(rng):
+    pts, kinds = room(rng, ceiling=True)
+    scene = prepare(pts + [0, 0, 0.3])
+    label = np.full(len(scene.voxels) + 1, -1)
+    label[:-1] = scene.structure_label
+    per_point = label[scene.point_to_voxel]
+    assert np.mean(per_point[kinds == "floor"] == 1) > 0.95
+    assert np.mean(per_point[kinds == "wall"] == 2) > 0.9
+    assert np.mean(per_point[kinds == "ceiling"] == 3) > 0.95
+    furniture = np.mean(
+        np.append(scene.object_mask, False)[scene.point_to_voxel][kinds == "furniture"]
+    )
+    assert furniture > 0.9
+    kinds_found = sorted({p.kind for p in scene.structure_planes})
+    assert kinds_found == ["ceiling", "floor", "wall"]
+    assert sum(p.kind == "wall" for p in scene.structure_planes) == 4
+    # Nothing above the altitude cut-off is searched.
+    assert scene.centers[scene.object_mask, 2].max() <= 1.4
+
+
+def test_altitude_cutoff_is_configurable(rng):
+    pts, _ = room(rng)
+    cfg = Config().with_overrides(["prepare.altitude_cutoff=0.5"])
+    scene = prepare(pts, cfg)
+    assert scene.centers[scene.object_mask, 2].max() <= 0.5
+
+
+# -- scale ---------------------------------------------------------------------------------
+def test_scale_recovery(rng):
+    pts, _ = room(rng, spacing=0.05)
+    assert scale_from_travel(10.0, 4.0) == 2.5
+    with pytest.raises(InvalidParameterError, match="'slam_distance'"):
+        scale_from_travel(1.0, 0.0)
+    mm = prepare(pts * 1000.0)
+    assert mm.scale == 0.001 and mm.info["scale_source"] == "units"
+    assert guess_scale(pts) == 1.0
+    half = prepare(pts * 0.5, travelled=(2.0, 1.0))
+    assert half.scale == 2.0
+    assert half.cloud.xyz[:, 2].max() == pytest.approx(2.5, abs=0.02)
+    given = prepare(pts, scale=1.0)
+    assert given.info["scale_source"] == "given"
+    with pytest.raises(InvalidParameterError, match="'scale'"):
+        prepare(pts, scale=-1.0)
+
+
+# -- the prepared scene --------------------------------------------------------------------
+def test_prepared_scene_maps_back_exactly(rng):
+    pts, _ = room(rng)
+    pts = np.vstack([pts, [[50.0, 50.0, 50.0]]])  # one far outlier
+    cloud = point_cloud(pts)
+    scene = prepare(cloud)
+    assert isinstance(scene, PreparedScene)
+    assert len(scene.cloud) == len(pts) == len(scene.point_to_voxel)
+    assert not scene.inliers[-1] and scene.point_to_voxel[-1] == -1
+    assert np.array_equal(scene.inliers, scene.point_to_voxel >= 0)
+    # Levelled coordinates go back to the input exactly.
+    assert np.allclose(scene.from_level(scene.cloud.xyz), pts, atol=1e-9)
+    assert np.allclose(scene.level(pts), scene.cloud.xyz, atol=1e-9)
+    obj = np.flatnonzero(scene.object_mask)
+    idx = scene.points_of(obj)
+    assert np.all(scene.object_mask[scene.point_to_voxel[idx]])
+    summary = scene.summary()
+    assert summary["num_points"] == len(pts) and summary["floor_found"]
+
+
+def test_prepare_does_not_modify_input_and_is_deterministic(rng):
+    pts, _ = room(rng)
+    cloud = point_cloud(pts)
+    before = cloud.xyz.copy()
+    a = prepare(cloud)
+    b = prepare(cloud)
+    assert np.array_equal(cloud.xyz, before)
+    assert np.array_equal(a.cloud.xyz, b.cloud.xyz)
+    assert np.array_equal(a.point_to_voxel, b.point_to_voxel)
+    assert np.array_equal(a.structure_label, b.structure_label)
+
+
+def test_prepare_rejects_empty_and_bad_up():
+    with pytest.raises(InvalidParameterError, match="'cloud'"):
+        prepare(np.zeros((0, 3)))
+    with pytest.raises(InvalidParameterError, match="'up'"):
+        prepare(np.random.default_rng(0).random((100, 3)), up="w")
+
+
+def test_bent_floor_is_followed(rng):
+    pts, kinds = room(rng)
+    bent = pts.copy()
+    bent[:, 2] += 0.02 * (bent[:, 0] - 2.0) ** 2  # the floor rises 8 cm towards two walls
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        scene = prepare(bent)
+    floor = scene.cloud.xyz[kinds == "floor", 2]
+    assert np.abs(floor).max() < 0.03
+    assert scene.info["floor_warp"] > 0.05
+
+
+def test_normals_and_smoothing(rng):
+    plane = rect(rng, (0, 0, 0), (1, 0, 0), (0, 1, 0), 0.01, noise=0.002)
+    normals, _ = estimate_normals(plane, 16)
+    assert np.mean(normals[:, 2] > 0.95) > 0.95
+    smooth = smooth_surface(plane, 16)
+    assert smooth[:, 2].std() < 0.5 * plane[:, 2].std()
