@@ -163,6 +163,11 @@ def label_clusters(
     costs = [label_costs(s, pl, ontology, beta=beta, gamma=gamma) for s, pl in zip(scores, planes)]
     options: list[list[str | None]] = []
     for s, c in zip(scores, costs):
+        # Algorithm 1: the cluster is kept when its best class passes the threshold; and a
+        # cluster that "none of the classes" explains best is not an object.
+        if s.best == NONE:
+            options.append([None])
+            continue
         allowed = [k for k in c if s.probabilities.get(k, 0.0) >= threshold]
         allowed.sort(key=lambda k: (c[k], k))
         options.append([*allowed, None] if allowed else [None])
@@ -239,7 +244,7 @@ def label_clusters(
         s = scores[i]
         if label is None:
             reason = ("below threshold" if options[i] == [None] else "excluded by an overlap")
-            if s.best == NONE and options[i] == [None]:
+            if s.best == NONE:
                 reason = "none of the classes"
             out.append(LabelChoice(None, costs[i], reason))
             continue

@@ -47,6 +47,9 @@ MAX_CANDIDATES = 6
 MIN_LOG_UNARY = math.log(1e-9)
 #: Name of the hypothesis that the cluster is none of the classes.
 NONE = "none"
+#: A plane no part explains costs the full ``extra_plane`` factor from this area up (m²);
+#: smaller patches (a caster, a strip of a frame) cost proportionally less.
+EXTRA_PLANE_AREA = 0.08
 
 
 @dataclass(frozen=True)
@@ -148,6 +151,11 @@ def _cluster_feature(desc: ClusterDescription, feature: str) -> float:
     return float(getattr(desc, feature))
 
 
+def _plane_weights(planes: Sequence[Any]) -> np.ndarray:
+    """(planes,) share of the full extra-plane penalty each plane costs, by its area."""
+    return np.array([min(1.0, float(p.area) / EXTRA_PLANE_AREA) for p in planes])
+
+
 def _unary(cls: ObjectClass, desc: ClusterDescription) -> np.ndarray:
     """(parts, planes) log-factor of each plane as each part, relations left out."""
     out = np.zeros((len(cls.parts), len(desc.planes)))
@@ -170,14 +178,16 @@ def score_class(cls: ObjectClass, desc: ClusterDescription, log_prior: float = 0
         del part
     rel_terms = [(part_index[r.a], part_index[r.b], r) for r in cls.relations]
 
-    # Planes no part explains cost ``extra_plane`` each: a stool is not a chair with a back.
-    log_extra = math.log(cls.extra_plane)
+    # Planes no part explains cost ``extra_plane`` each, weighted by their size: a stool
+    # is not a chair with a back, but a chair is still a chair with a caster in view.
+    plane_log_extra = math.log(cls.extra_plane) * _plane_weights(desc.planes)
+    all_extra = float(plane_log_extra.sum())
     best_log, best_assign = -math.inf, None
     for combo in itertools.product(*candidates):
         used = [c for c in combo if c is not None]
         if len(used) != len(set(used)):
             continue
-        total = (len(desc.planes) - len(used)) * log_extra
+        total = all_extra - float(sum(plane_log_extra[c] for c in used))
         for p, c in enumerate(combo):
             total += unary[p, c] if c is not None else math.log(cls.parts[p].missing)
         if total <= best_log:
@@ -221,12 +231,13 @@ def score_class(cls: ObjectClass, desc: ClusterDescription, log_prior: float = 0
             constraints.append(ConstraintValue(name, feature, "Pr", value, g, f))
     cluster_log = 0.0
     cluster_factor = 1.0
-    unexplained = len(desc.planes) - sum(c is not None for c in best_assign)
+    used = {c for c in best_assign if c is not None}
+    unexplained = [k for k in range(len(desc.planes)) if k not in used]
     if cls.extra_plane < 1.0 and unexplained:
-        f = cls.extra_plane**unexplained
+        f = math.exp(float(sum(plane_log_extra[k] for k in unexplained)))
         cluster_factor *= f
         constraints.append(ConstraintValue("cluster", "extra_plane", "cluster",
-                                           float(unexplained), None, f))
+                                           float(len(unexplained)), None, f))
     for feature, g in cls.cluster.constraints.items():
         value = _cluster_feature(desc, feature)
         f = float(g(value))
