@@ -198,3 +198,20 @@ def test_bad_yaml_and_wrong_format(tmp_path):
 def test_none_takes_mass_when_nothing_fits():
     wall = cluster([P(tilt=90, height=1.2, length=3.0, width=2.4)], length=3.0, height=2.4)
     assert score_cluster(wall, builtin_ontology()).best == NONE
+
+
+def test_plateau_constraint_is_flat_inside_with_soft_tails():
+    o = parse_ontology("""
+format: ontodetect.ontology/1
+classes:
+  t:
+    parts:
+      top: {length: {min: 0.5, max: 3.0, soft: 0.25}}
+""")
+    g = o["t"].part("top").constraints["length"]
+    assert float(g(0.5)) == 1.0 and float(g(2.0)) == 1.0 and float(g(3.0)) == 1.0
+    assert float(g(0.25)) == pytest.approx(math.exp(-0.5))
+    assert float(g(3.5)) == pytest.approx(math.exp(-2.0))
+    with pytest.raises(InvalidOntologyError, match="min < max"):
+        parse_ontology("format: ontodetect.ontology/1\nclasses:\n  t:\n    parts:\n"
+                       "      top: {length: {min: 3, max: 1}}\n")

@@ -4,7 +4,8 @@ A constraint written ``{mean: 0.46, sigma: 0.05}`` is ``N(0.46, 0.05²)``; a ran
 ``[0.35, 0.75]`` is read as the Gaussian centred on the range whose σ is half its
 width, so the bounds score ``exp(-1/2) ≈ 0.61`` and values far outside fall off
 quickly; ``{min: 0.3}`` and ``{max: 1.2}`` are one-sided: 1 on the allowed side
-and a Gaussian tail of the given (or default) softness beyond the bound.
+and a Gaussian tail of the given (or default) softness beyond the bound;
+``{min: 0.5, max: 4, soft: 0.2}`` is a plateau: 1 inside, tails on both sides.
 
 The factor is the Gaussian's density scaled to 1 at its mean, so a perfect
 measurement contributes 1 and products of factors stay comparable between
@@ -55,12 +56,16 @@ class Gaussian:
     mean: float
     sigma: float
     side: str = "both"
+    upper: float | None = None
 
     def __post_init__(self) -> None:
         if not math.isfinite(self.mean) or not math.isfinite(self.sigma) or self.sigma <= 0:
             raise ValueError(f"Gaussian needs a finite mean and sigma > 0, got {self}")
-        if self.side not in ("both", "min", "max"):
-            raise ValueError(f"Gaussian side must be 'both', 'min' or 'max', got {self.side!r}")
+        if self.side not in ("both", "min", "max", "plateau"):
+            raise ValueError("Gaussian side must be 'both', 'min', 'max' or 'plateau', "
+                             f"got {self.side!r}")
+        if self.side == "plateau" and (self.upper is None or not self.upper > self.mean):
+            raise ValueError(f"a plateau needs min < max, got [{self.mean}, {self.upper}]")
 
     @classmethod
     def from_range(cls, low: float, high: float) -> Gaussian:
@@ -68,6 +73,12 @@ class Gaussian:
         if not high > low:
             raise ValueError(f"a range needs low < high, got [{low}, {high}]")
         return cls((low + high) / 2.0, max((high - low) / 2.0, MIN_SIGMA))
+
+    @classmethod
+    def plateau(cls, low: float, high: float, softness: float | None = None) -> Gaussian:
+        """1 on ``[low, high]``, Gaussian tails of σ = ``softness`` outside."""
+        s = softness if softness is not None else max((high - low) * DEFAULT_SOFTNESS, MIN_SIGMA)
+        return cls(low, s, "plateau", high)
 
     @classmethod
     def at_least(cls, bound: float, softness: float | None = None) -> Gaussian:
@@ -83,6 +94,9 @@ class Gaussian:
 
     def z(self, x: ArrayLike) -> NDArray[np.float64]:
         """Signed distance from the allowed region in units of σ (0 inside it)."""
+        if self.side == "plateau":
+            v = np.asarray(x, dtype=np.float64)
+            return (np.minimum(v - self.mean, 0.0) + np.maximum(v - self.upper, 0.0)) / self.sigma
         d = (np.asarray(x, dtype=np.float64) - self.mean) / self.sigma
         if self.side == "min":
             d = np.minimum(d, 0.0)
@@ -104,4 +118,6 @@ class Gaussian:
             return f">= {self.mean:.3g} (soft {self.sigma:.2g})"
         if self.side == "max":
             return f"<= {self.mean:.3g} (soft {self.sigma:.2g})"
+        if self.side == "plateau":
+            return f"in [{self.mean:.3g}, {self.upper:.3g}] (soft {self.sigma:.2g})"
         return f"N({self.mean:.3g}, {self.sigma:.2g}²)"

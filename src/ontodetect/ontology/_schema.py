@@ -279,6 +279,16 @@ def _gaussian(value: Any, path: tuple[Any, ...]) -> Gaussian:
             if sigma <= 0:
                 raise _Problem(path + ("sigma",), f"sigma must be > 0, got {sigma:g}")
             return Gaussian(_number(value["mean"], path + ("mean",)), sigma)
+        if "min" in keys and "max" in keys:
+            _only(value, {"min", "max", "soft"}, path)
+            lo = _number(value["min"], path + ("min",))
+            hi = _number(value["max"], path + ("max",))
+            if not hi > lo:
+                raise _Problem(path, f"expected min < max, got min {lo:g}, max {hi:g}")
+            soft = value.get("soft")
+            if soft is not None and _number(soft, path + ("soft",)) <= 0:
+                raise _Problem(path + ("soft",), f"soft must be > 0, got {soft!r}")
+            return Gaussian.plateau(lo, hi, None if soft is None else float(soft))
         for side, make in (("min", Gaussian.at_least), ("max", Gaussian.at_most)):
             if side in keys:
                 _only(value, {side, "soft"}, path)
@@ -289,7 +299,8 @@ def _gaussian(value: Any, path: tuple[Any, ...]) -> Gaussian:
                             None if soft is None else float(soft))
     except ValueError as exc:  # from Gaussian itself
         raise _Problem(path, str(exc)) from exc
-    raise _Problem(path, f"expected one of range, mean/sigma, min, max; got keys {sorted(keys)}")
+    raise _Problem(path, f"expected one of range, mean/sigma, min, max, min+max; got keys "
+                         f"{sorted(keys)}")
 
 
 def _only(mapping: dict[str, Any], allowed: set[str], path: tuple[Any, ...]) -> None:
