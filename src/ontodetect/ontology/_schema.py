@@ -73,6 +73,8 @@ CLUSTER_FEATURES: dict[str, str] = {
     "height": "top of the cluster above the floor (m)",
     "bottom": "lowest point above the floor (m)",
     "planes": "number of planes found in the cluster",
+    "rise": "height of the cluster above its highest horizontal plane (m): a backrest rises "
+            "above a seat, nothing rises above a cabinet top",
 }
 #: Factor used for a part that has no plane when the file does not say.
 DEFAULT_MISSING = {True: 0.02, False: 0.3}

@@ -45,6 +45,8 @@ __all__ = [
 MAX_CANDIDATES = 6
 #: Planes whose unary log-score is below this are not worth assigning (factor < 1e-9).
 MIN_LOG_UNARY = math.log(1e-9)
+#: Planes tilted less than this (degrees) count as horizontal for the cluster's ``rise``.
+HORIZONTAL_TILT = 10.0
 #: Name of the hypothesis that the cluster is none of the classes.
 NONE = "none"
 #: A plane no part explains costs the full ``extra_plane`` factor from this area up (m²);
@@ -75,6 +77,12 @@ class ClusterDescription:
     breadth: float
     height: float
     bottom: float
+
+    @property
+    def rise(self) -> float:
+        """Height of the cluster above the top of its highest horizontal plane (m)."""
+        tops = [float(p.z_max) for p in self.planes if float(p.tilt) <= HORIZONTAL_TILT]
+        return max(0.0, self.height - max(tops)) if tops else self.height
 
 
 @dataclass(frozen=True)

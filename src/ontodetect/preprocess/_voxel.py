@@ -15,6 +15,8 @@ __all__ = ["VoxelGrid", "grouped_covariance", "voxel_keys", "voxelize"]
 #: 40 km at 2 cm), so that grouping is a single integer sort.
 KEY_BITS = 21
 KEY_LIMIT = 1 << KEY_BITS
+#: Grids whose keys fit in this many bits are grouped with 32-bit integers.
+SMALL_KEY_BITS = 31
 
 
 @dataclass(frozen=True, eq=False)
@@ -101,9 +103,27 @@ def voxel_keys(points: ArrayLike, size: float, origin: ArrayLike) -> NDArray[np.
     return np.floor((pts - np.asarray(origin, dtype=np.float64)) / size).astype(np.int64)
 
 
-def _pack(keys: NDArray[np.int64]) -> NDArray[np.int64]:
-    # Keys are offset to be non-negative before packing.
-    return (keys[:, 0] << (2 * KEY_BITS)) | (keys[:, 1] << KEY_BITS) | keys[:, 2]
+def _pack(keys: NDArray[np.int64]) -> tuple[NDArray[np.integer], tuple[int, int, int]]:
+    """One integer per (non-negative) key, and the bits of each axis.
+
+    Room-sized grids fit in 31 bits: 32-bit integers sort about three times faster
+    than 64-bit ones, and sorting is most of the cost of grouping.
+    """
+    bits = tuple(max(1, int(v).bit_length()) for v in keys.max(axis=0))
+    if sum(bits) <= SMALL_KEY_BITS:
+        k = keys.astype(np.int32)
+        return (k[:, 0] << (bits[1] + bits[2])) | (k[:, 1] << bits[2]) | k[:, 2], bits
+    bits = (KEY_BITS, KEY_BITS, KEY_BITS)
+    return (keys[:, 0] << (2 * KEY_BITS)) | (keys[:, 1] << KEY_BITS) | keys[:, 2], bits
+
+
+def _unpack(packed: NDArray[np.integer], bits: tuple[int, int, int]) -> NDArray[np.int64]:
+    p = packed.astype(np.int64)
+    out = np.empty((len(p), 3), dtype=np.int64)
+    out[:, 0] = p >> (bits[1] + bits[2])
+    out[:, 1] = (p >> bits[2]) & ((1 << bits[1]) - 1)
+    out[:, 2] = p & ((1 << bits[2]) - 1)
+    return out
 
 
 def voxelize(
@@ -177,18 +197,15 @@ def voxelize(
             f"large enough for at most {KEY_LIMIT} voxels along an axis",
             f"{size} over an extent of {float(np.ptp(sel, axis=0).max()):.4g}",
         )
-    unique, inverse, counts = np.unique(_pack(shifted), return_inverse=True, return_counts=True)
+    packed, bits = _pack(shifted)
+    unique, inverse, counts = np.unique(packed, return_inverse=True, return_counts=True)
     inverse = inverse.reshape(-1)
     m = len(unique)
     centers = np.empty((m, 3))
     for a in range(3):
         centers[:, a] = np.bincount(inverse, weights=sel[:, a], minlength=m)
     centers /= counts[:, None]
-    ukeys = np.empty((m, 3), dtype=np.int64)
-    ukeys[:, 0] = unique >> (2 * KEY_BITS)
-    ukeys[:, 1] = (unique >> KEY_BITS) & (KEY_LIMIT - 1)
-    ukeys[:, 2] = unique & (KEY_LIMIT - 1)
-    ukeys += low
+    ukeys = _unpack(unique, bits) + low
     mean_colors = None
     if colors is not None:
         col = np.asarray(colors)

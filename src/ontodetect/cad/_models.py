@@ -1,0 +1,595 @@
+"""Generic CAD models: a thin profile for matching and a full model for display (thesis §3.7).
+
+A :class:`CadModel` is one generic object of a class (``chair``, ``sofa``,
+``table`` ...) in its canonical frame: the origin at the centre of its footprint
+on the floor, x to its right, y to its front (the way a person sitting on it
+faces), z up, metres. This is the object frame of :mod:`ontodetect.synth`, so a
+fitted pose compares directly with a simulated object's pose.
+
+Each model comes in two forms. The sensor sees only some surfaces of a piece of
+furniture: the top of a seat, the front and back of a backrest, the top and
+edges of a table, never the underside. Matching a solid model would pull the
+fit towards surfaces that have no points (thesis §4, Figures 4.9–4.10), so
+matching uses the **thin profile** (:attr:`CadModel.thin`: the surfaces that
+face sideways or up, see :func:`visible_shell`) and display uses the **full**
+closed model (:attr:`CadModel.full`).
+
+Models are point-sampled by area (:func:`sample_surface`, seeded) and then
+grid-averaged (:func:`grid_downsample`, 0.5 cm by default, the grid of the
+thesis's experiment) before matching; samples are cached on the model.
+
+:func:`builtin_library` holds procedural generic models built from the solids
+of :mod:`ontodetect.synth.meshes`: chairs (four-legged, with arms, office
+swivel, armchair), sofas (two and three seats), tables (rectangular, square,
+round, coffee) and a desk. They are deliberately plain, like the roughly drawn
+models of the thesis: dimensions are the middle of the ranges of furniture
+standards, and fitting may scale them to the object (:mod:`ontodetect.cad._fit`).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Iterable, Iterator, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.spatial import cKDTree
+
+from ..errors import InvalidParameterError
+from ..preprocess import voxelize
+from ..synth import meshes as M
+from ..synth.meshes import Mesh
+
+__all__ = [
+    "MODEL_SPACING",
+    "CadModel",
+    "ModelLibrary",
+    "box_model",
+    "builtin_library",
+    "canonical_mesh",
+    "grid_downsample",
+    "sample_surface",
+    "visible_shell",
+]
+
+#: Grid (m) the model samples are averaged on before matching: 0.5 cm, as in the thesis's
+#: experiment (§4, "a grid size of 0.5 cm³ was used for both source point cloud and the
+#: meshed CAD models").
+MODEL_SPACING = 0.005
+#: Area samples drawn per grid cell before averaging, so that nearly every cell a surface
+#: crosses gets at least one sample.
+SAMPLES_PER_CELL = 3.0
+#: A face whose normal points further down than this (z component) is never seen by a
+#: sensor that stands on the floor: it is left out of the thin profile.
+HIDDEN_NORMAL_Z = -0.5
+#: Symmetry orders: 1 none, 2 half a turn (rectangular), 4 a quarter turn (square),
+#: 0 any rotation (round).
+SYMMETRIES = (0, 1, 2, 4)
+#: Default colour of each class when the scan has no colours (sRGB).
+LABEL_COLORS: dict[str, tuple[int, int, int]] = {
+    "chair": (200, 80, 60),
+    "sofa": (70, 110, 170),
+    "table": (170, 130, 90),
+}
+DEFAULT_COLOR = (150, 150, 150)
+
+
+# ---------------------------------------------------------------------------------------
+# Sampling
+
+
+def grid_downsample(points: ArrayLike, spacing: float = MODEL_SPACING) -> NDArray[np.float64]:
+    """(k, 3) float: the grid average of (n, 3) points, one point per occupied cell.
+
+    The result does not depend on the order of the input points.
+
+    Examples
+    --------
+    >>> grid_downsample([[0.001, 0, 0], [0.003, 0, 0], [0.05, 0, 0]], 0.02).tolist()
+    [[0.002, 0.0, 0.0], [0.05, 0.0, 0.0]]
+    """
+    pts = np.asarray(points, dtype=np.float64)
+    if pts.ndim != 2 or pts.shape[1] != 3:
+        raise InvalidParameterError("points", "an array of shape (n, 3)", f"shape {pts.shape}")
+    if not (isinstance(spacing, (int, float)) and spacing > 0):
+        raise InvalidParameterError("spacing", "a float in the range (0, inf)", spacing)
+    if len(pts) == 0:
+        return np.zeros((0, 3))
+    return np.array(voxelize(pts, float(spacing)).centers)
+
+
+def _triangle_areas(mesh: Mesh) -> NDArray[np.float64]:
+    v = mesh.vertices[mesh.triangles]
+    return 0.5 * np.linalg.norm(np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1)
+
+
+def sample_surface(
+    mesh: Mesh,
+    spacing: float = MODEL_SPACING,
+    rng: int | np.random.Generator | None = 0,
+) -> NDArray[np.float64]:
+    """(k, 3) float: points spread evenly over a mesh's surface, one per grid cell.
+
+    Points are drawn uniformly by area (about three per cell of the grid) and
+    then grid-averaged at ``spacing`` (:func:`grid_downsample`). A mesh without
+    triangles is a point set: its vertices are grid-averaged.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        Triangles to sample.
+    spacing : float
+        Grid edge (m).
+    rng : int or numpy.random.Generator, optional
+        Seed of the area sampling; the same seed gives the same points.
+
+    Examples
+    --------
+    >>> from ontodetect.synth.meshes import box
+    >>> pts = sample_surface(box((1.0, 1.0, 0.02)), spacing=0.05, rng=0)
+    >>> bool(abs(pts[:, 2]).max() <= 0.01), 800 < len(pts) < 1200
+    (True, True)
+    """
+    if not (isinstance(spacing, (int, float)) and spacing > 0):
+        raise InvalidParameterError("spacing", "a float in the range (0, inf)", spacing)
+    if len(mesh.triangles) == 0:
+        return grid_downsample(mesh.vertices, spacing)
+    gen = np.random.default_rng(rng)
+    areas = _triangle_areas(mesh)
+    total = float(areas.sum())
+    if total <= 0:
+        return grid_downsample(mesh.vertices, spacing)
+    n = max(1, math.ceil(SAMPLES_PER_CELL * total / spacing**2))
+    tri = gen.choice(len(areas), size=n, p=areas / total)
+    # Uniform barycentric coordinates: fold the unit square onto the triangle.
+    u, v = gen.random(n), gen.random(n)
+    flip = u + v > 1.0
+    u[flip], v[flip] = 1.0 - u[flip], 1.0 - v[flip]
+    corners = mesh.vertices[mesh.triangles[tri]]
+    pts = (
+        corners[:, 0]
+        + u[:, None] * (corners[:, 1] - corners[:, 0])
+        + v[:, None] * (corners[:, 2] - corners[:, 0])
+    )
+    return grid_downsample(pts, spacing)
+
+
+def visible_shell(mesh: Mesh, hidden_normal_z: float = HIDDEN_NORMAL_Z) -> Mesh:
+    """The thin profile of a solid: its faces except those that face the floor.
+
+    A sensor standing on the floor sees the top and sides of a seat, both faces
+    of a backrest and the top and edges of a table, never their undersides.
+    Faces whose outward normal has a z component below ``hidden_normal_z`` are
+    dropped.
+
+    Examples
+    --------
+    >>> from ontodetect.synth.meshes import box
+    >>> len(box((1.0, 1.0, 1.0)).triangles), len(visible_shell(box((1.0, 1.0, 1.0))).triangles)
+    (12, 10)
+    """
+    if len(mesh.triangles) == 0:
+        return mesh
+    v = mesh.vertices[mesh.triangles]
+    normal = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
+    length = np.linalg.norm(normal, axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        nz = np.where(length > 0, normal[:, 2] / length, 0.0)
+    return Mesh(mesh.vertices, mesh.triangles[nz >= hidden_normal_z])
+
+
+def canonical_mesh(mesh: Mesh, reference: Mesh | None = None) -> tuple[Mesh, NDArray[np.float64]]:
+    """Move a mesh so that its footprint is centred on the origin and its lowest point is at z = 0.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        The mesh to move.
+    reference : Mesh, optional
+        The mesh whose bounding box decides the shift (the full model, when
+        moving its thin profile along with it); ``mesh`` itself by default.
+
+    Returns
+    -------
+    mesh : Mesh
+    shift : (3,) float
+        The translation applied.
+    """
+    ref = mesh if reference is None else reference
+    if len(ref.vertices) == 0:
+        return mesh, np.zeros(3)
+    lo, hi = ref.bounds
+    shift = np.array([-(lo[0] + hi[0]) / 2, -(lo[1] + hi[1]) / 2, -lo[2]])
+    return mesh.translated(shift), shift
+
+
+# ---------------------------------------------------------------------------------------
+# Models
+
+
+@dataclass(frozen=True, eq=False)
+class CadModel:
+    """A generic model of one class, in its canonical frame (metres, z up, y front).
+
+    Attributes
+    ----------
+    name : str
+        Unique name in its library, e.g. ``"chair-4leg"``.
+    label : str
+        Class it stands for (the ontology's class name).
+    full : Mesh
+        Display model (closed solids, or a point set when it has no triangles).
+    thin : Mesh
+        Matching profile: the surfaces a sensor sees.
+    dims : mapping of str to float
+        ``width`` (x), ``depth`` (y), ``height`` of the full model, and where they
+        apply ``seat_height``, ``seat_width``, ``seat_depth`` (seating) or
+        ``top_height``, ``top_width``, ``top_depth`` (tables), in metres.
+    symmetry : int
+        Rotations about z that leave the model unchanged: 1 none, 2 half a
+        turn, 4 a quarter turn, 0 any (round).
+    color : (3,) int
+        Colour used when the scan has none.
+    description : str
+    source : str
+        ``"builtin"`` or the file the model was read from.
+    """
+
+    name: str
+    label: str
+    full: Mesh
+    thin: Mesh
+    dims: Mapping[str, float]
+    symmetry: int = 1
+    color: tuple[int, int, int] = DEFAULT_COLOR
+    description: str = ""
+    source: str = "builtin"
+    _cache: dict[Any, Any] = field(default_factory=dict, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        if self.symmetry not in SYMMETRIES:
+            raise InvalidParameterError("symmetry", "one of 0, 1, 2, 4", self.symmetry)
+
+    @property
+    def seat_height(self) -> float | None:
+        return self.dims.get("seat_height")
+
+    @property
+    def top_height(self) -> float | None:
+        return self.dims.get("top_height")
+
+    @property
+    def is_seating(self) -> bool:
+        """True for models with a seat (chairs, sofas): they have a front."""
+        return "seat_height" in self.dims
+
+    def points(self, spacing: float = MODEL_SPACING, seed: int = 0) -> NDArray[np.float64]:
+        """(k, 3) float: the thin profile sampled and grid-averaged at ``spacing`` (cached)."""
+        key = ("thin", float(spacing), seed)
+        if key not in self._cache:
+            pts = sample_surface(self.thin, spacing, seed)
+            pts.flags.writeable = False
+            self._cache[key] = pts
+        return self._cache[key]
+
+    def tree(self, spacing: float = MODEL_SPACING, seed: int = 0) -> cKDTree:
+        """A k-d tree of :meth:`points` (cached): one tree serves every object fitted."""
+        key = ("tree", float(spacing), seed)
+        if key not in self._cache:
+            self._cache[key] = cKDTree(self.points(spacing, seed))
+        return self._cache[key]
+
+    def display_points(self, spacing: float = 0.01, seed: int = 0) -> NDArray[np.float64]:
+        """(k, 3) float: the full model sampled at ``spacing`` (cached), for object maps."""
+        key = ("full", float(spacing), seed)
+        if key not in self._cache:
+            pts = sample_surface(self.full, spacing, seed)
+            pts.flags.writeable = False
+            self._cache[key] = pts
+        return self._cache[key]
+
+    def summary(self) -> dict[str, Any]:
+        """JSON-ready description (name, label, sizes, triangle counts, source)."""
+        return {
+            "name": self.name,
+            "label": self.label,
+            "dims": {k: round(float(v), 4) for k, v in self.dims.items()},
+            "symmetry": self.symmetry,
+            "full_triangles": len(self.full.triangles),
+            "thin_triangles": len(self.thin.triangles),
+            "source": self.source,
+            "description": self.description,
+        }
+
+
+def _dims_of(full: Mesh, extra: Mapping[str, float]) -> dict[str, float]:
+    lo, hi = full.bounds
+    dims = {"width": float(hi[0] - lo[0]), "depth": float(hi[1] - lo[1]), "height": float(hi[2])}
+    dims.update({k: float(v) for k, v in extra.items()})
+    return dims
+
+
+def make_model(
+    name: str,
+    label: str,
+    parts: Iterable[Mesh],
+    dims: Mapping[str, float],
+    *,
+    symmetry: int = 1,
+    color: tuple[int, int, int] | None = None,
+    description: str = "",
+    thin_parts: Iterable[Mesh] | None = None,
+) -> CadModel:
+    """A model from solid parts: full = the solids, thin = their :func:`visible_shell`.
+
+    ``dims`` gives the class-specific sizes (``seat_height`` ...); overall width,
+    depth and height are measured. The parts are moved to the canonical frame.
+    """
+    solids = list(parts)
+    full = M.concatenate(solids)
+    thin_src = solids if thin_parts is None else list(thin_parts)
+    thin = M.concatenate([visible_shell(m) for m in thin_src])
+    full, shift = canonical_mesh(full)
+    thin = thin.translated(shift)
+    return CadModel(
+        name=name,
+        label=label,
+        full=full,
+        thin=thin,
+        dims=_dims_of(full, dims),
+        symmetry=symmetry,
+        color=color or LABEL_COLORS.get(label, DEFAULT_COLOR),
+        description=description,
+    )
+
+
+def box_model(label: str = "object") -> CadModel:
+    """The blank model: a unit box standing on the floor, scaled to a detection's box.
+
+    Objects whose probability is too low (thesis §4: "objects with very low
+    probabilities are replaced with blank models") or that no model fits get it.
+    """
+    full = M.box_between((-0.5, -0.5, 0.0), (0.5, 0.5, 1.0))
+    return CadModel("box", label, full, full, _dims_of(full, {}), symmetry=4,
+                    color=LABEL_COLORS.get(label, DEFAULT_COLOR),
+                    description="Blank box: the detection's box.")
+
+
+class ModelLibrary(Mapping[str, CadModel]):
+    """Models by name, with the ones of each label in insertion order.
+
+    Examples
+    --------
+    >>> lib = builtin_library()
+    >>> "chair-4leg" in lib, lib["table-round"].symmetry
+    (True, 0)
+    >>> sorted(lib.labels)
+    ['chair', 'sofa', 'table']
+    """
+
+    def __init__(self, models: Iterable[CadModel] = ()) -> None:
+        self._models: dict[str, CadModel] = {}
+        for m in models:
+            self._models[m.name] = m
+
+    def __getitem__(self, name: str) -> CadModel:
+        try:
+            return self._models[name]
+        except KeyError:
+            raise InvalidParameterError(
+                "model", f"one of {', '.join(self._models)}", name) from None
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._models)
+
+    def __len__(self) -> int:
+        return len(self._models)
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._models
+
+    def __repr__(self) -> str:
+        return f"ModelLibrary({list(self._models)})"
+
+    @property
+    def labels(self) -> list[str]:
+        """Labels that have at least one model, in order of first appearance."""
+        return list(dict.fromkeys(m.label for m in self._models.values()))
+
+    def for_label(self, label: str) -> list[CadModel]:
+        """The models of one label (empty when there is none)."""
+        return [m for m in self._models.values() if m.label == label]
+
+    def merged(self, other: Iterable[CadModel]) -> ModelLibrary:
+        """A new library with ``other``'s models added; a model of the same name replaces ours."""
+        return ModelLibrary([*self._models.values(), *other])
+
+
+# ---------------------------------------------------------------------------------------
+# The built-in generic models. Sizes are the middle of the ranges of the standards that
+# synth.furniture cites (EN 12520, EN 1335, EN 1730, Neufert), rounded: they are generic,
+# not any particular chair.
+
+CHAIR_SEAT = (0.45, 0.43, 0.46)  # width, depth, height of the seat top
+SOFA_SEAT_HEIGHT = 0.43
+TABLE_HEIGHT = 0.74
+COFFEE_TABLE_HEIGHT = 0.45
+
+
+def _reclined(lo: ArrayLike, hi: ArrayLike, tilt_deg: float, pivot: ArrayLike) -> Mesh:
+    """A box given relative to ``pivot`` and reclined by ``tilt_deg`` (top towards -y)."""
+    p = np.asarray(pivot, dtype=np.float64)
+    box = M.box_between(np.asarray(lo, float) + p, np.asarray(hi, float) + p)
+    return box.rotated("x", math.radians(tilt_deg), about=p)
+
+
+def _four_legs(half_x: float, half_y: float, top: float, width: float) -> list[Mesh]:
+    return [
+        M.box_between((sx * half_x - width / 2, sy * half_y - width / 2, 0.0),
+                      (sx * half_x + width / 2, sy * half_y + width / 2, top))
+        for sx in (-1, 1) for sy in (-1, 1)
+    ]
+
+
+def _chair_4leg(arms: bool) -> CadModel:
+    sw, sd, sh = CHAIR_SEAT
+    if arms:
+        sw = 0.50
+    st, lw, tilt = 0.03, 0.04, 10.0
+    lx, ly = sw / 2 - 0.01 - lw / 2, sd / 2 - 0.01 - lw / 2
+    parts = [M.box_between((-sw / 2, -sd / 2, sh - st), (sw / 2, sd / 2, sh))]
+    parts += _four_legs(lx, ly, sh - st, lw)
+    pivot = (0.0, -ly, sh - st)
+    back = 0.88 - (sh - st)  # top of the backrest at 88 cm
+    for sx in (-1, 1):
+        parts.append(_reclined((sx * lx - lw / 2, -0.018, 0.0), (sx * lx + lw / 2, 0.018, back),
+                               tilt, pivot))
+    parts.append(_reclined((-lx, -0.011, back - 0.28), (lx, 0.011, back - 0.01), tilt, pivot))
+    if arms:
+        top = sh + 0.22
+        for sx in (-1, 1):
+            x = sx * lx
+            parts.append(M.box_between((x - 0.025, -ly - 0.04, top - 0.025),
+                                       (x + 0.025, ly + 0.03, top)))
+            parts.append(M.box_between((x - 0.015, ly - 0.015, sh - st), (x + 0.015, ly + 0.015,
+                                                                            top - 0.025)))
+    name = "chair-4leg-arms" if arms else "chair-4leg"
+    text = "Four-legged chair" + (" with armrests" if arms else "") + ", panel backrest."
+    return make_model(name, "chair", parts,
+                      {"seat_height": sh, "seat_width": sw, "seat_depth": sd},
+                      description=text)
+
+
+def _chair_office() -> CadModel:
+    sw, sd, sh, st = 0.48, 0.45, 0.47, 0.07
+    parts = [M.rounded_box((sw, sd, st), 0.04, center=(0.0, 0.02, sh - st / 2))]
+    pivot = np.array([0.0, -sd / 2 + 0.02, sh + 0.05])
+    parts.append(M.rounded_box((0.45, 0.06, 0.55), 0.05, axis="y",
+                               center=pivot + (0.0, -0.03, 0.30))
+                 .rotated("x", math.radians(12.0), about=pivot))
+    # Spine from under the seat to the backrest.
+    parts.append(M.box_between((-0.03, -sd / 2 - 0.01, sh - st - 0.03), (0.03, -sd / 2 + 0.05,
+                                                                          sh + 0.08)))
+    parts.append(M.cylinder(0.028, sh - st - 0.10, 16, center=(0.0, 0.0, 0.10)))
+    radius = 0.32
+    for k in range(5):
+        arm = M.box_between((0.0, -0.02, 0.06), (radius, 0.02, 0.10))
+        parts.append(arm.rotated("z", math.pi / 2 + 2 * math.pi * k / 5))
+        a = math.pi / 2 + 2 * math.pi * k / 5
+        parts.append(M.cylinder(0.025, 0.06, 12,
+                                center=(radius * math.cos(a), radius * math.sin(a), 0.0)))
+    top = sh + 0.22
+    for sx in (-1, 1):
+        x = sx * (sw / 2 + 0.02)
+        parts.append(M.box_between((x - 0.035, -0.12, top - 0.03), (x + 0.035, 0.16, top)))
+        parts.append(M.box_between((x - 0.015, -0.06, sh - st), (x + 0.015, -0.02, top - 0.03)))
+    return make_model("chair-office", "chair", parts,
+                      {"seat_height": sh, "seat_width": sw, "seat_depth": sd},
+                      description="Office swivel chair: five-star base, armrests.")
+
+
+def _upholstered(name: str, label: str, inner: float, seats: int, arm: float,
+                 depth: float, seat_h: float, height: float, text: str) -> CadModel:
+    """Armchair or sofa: a base, seat cushions, a back and two arms, on short feet."""
+    W, D, z0 = inner + 2 * arm, depth, 0.06
+    back_t, back_cushion = 0.18, 0.14
+    ct = 0.13
+    parts = [M.box_between((-inner / 2, -D / 2 + back_t, z0), (inner / 2, D / 2, seat_h - ct))]
+    edges = np.linspace(-inner / 2, inner / 2, seats + 1)
+    y0 = -D / 2 + back_t + back_cushion
+    for a, b in zip(edges[:-1], edges[1:]):
+        parts.append(M.cushion((b - a - 0.006, D / 2 - y0, ct), 0.15,
+                               center=((a + b) / 2, (y0 + D / 2) / 2, seat_h - ct / 2)))
+        pivot = np.array([(a + b) / 2, -D / 2 + back_t + back_cushion / 2, seat_h - 0.02])
+        bh = height - seat_h - 0.04
+        cush = M.cushion((b - a - 0.006, back_cushion, bh), 0.25, center=pivot + (0, 0, bh / 2))
+        parts.append(cush.rotated("x", math.radians(12.0), about=pivot))
+    parts.append(M.rounded_box((W, back_t, height - z0), 0.04, axis="x",
+                               center=(0.0, -D / 2 + back_t / 2, (height + z0) / 2)))
+    arm_top = seat_h + 0.20
+    for sx in (-1, 1):
+        parts.append(M.rounded_box((arm, D, arm_top - z0), min(0.05, arm / 2 - 0.005), axis="y",
+                                   center=(sx * (inner / 2 + arm / 2), 0.0, (arm_top + z0) / 2)))
+    for sx in (-1, 1):
+        for sy in (-1, 1):
+            parts.append(M.cylinder(0.022, z0, 12,
+                                    center=(sx * (W / 2 - 0.06), sy * (D / 2 - 0.06), 0.0)))
+    return make_model(name, label, parts,
+                      {"seat_height": seat_h, "seat_width": inner, "seat_depth": D - back_t -
+                       back_cushion}, description=text)
+
+
+def _rect_table(name: str, width: float, depth: float, height: float, symmetry: int,
+                text: str, apron: bool = True) -> CadModel:
+    t, lw, inset = 0.03, 0.05, 0.06
+    parts = [M.rounded_box((width, depth, t), 0.01, center=(0.0, 0.0, height - t / 2))]
+    lx, ly = width / 2 - inset - lw / 2, depth / 2 - inset - lw / 2
+    parts += _four_legs(lx, ly, height - t, lw)
+    if apron:
+        z0, z1 = height - t - 0.08, height - t
+        for sy in (-1, 1):
+            parts.append(M.box_between((-lx, sy * ly - 0.01, z0), (lx, sy * ly + 0.01, z1)))
+        for sx in (-1, 1):
+            parts.append(M.box_between((sx * lx - 0.01, -ly, z0), (sx * lx + 0.01, ly, z1)))
+    return make_model(name, "table", parts,
+                      {"top_height": height, "top_width": width, "top_depth": depth},
+                      symmetry=symmetry, description=text)
+
+
+def _round_table() -> CadModel:
+    d, h, t = 1.0, TABLE_HEIGHT, 0.03
+    parts = [
+        M.cylinder(d / 2, t, 48, center=(0.0, 0.0, h - t)),
+        M.cylinder(0.06, h - t - 0.04, 24, center=(0.0, 0.0, 0.04)),
+        M.lathe([(0, 0), (0.30, 0), (0.30, 0.015), (0.08, 0.05), (0, 0.05)], 36),
+    ]
+    return make_model("table-round", "table", parts,
+                      {"top_height": h, "top_width": d, "top_depth": d}, symmetry=0,
+                      description="Round table on a central pedestal and disc foot.")
+
+
+def _desk() -> CadModel:
+    w, d, h, t = 1.40, 0.70, 0.74, 0.03
+    parts = [M.box_between((-w / 2, -d / 2, h - t), (w / 2, d / 2, h))]
+    for sx in (-1, 1):
+        x = sx * (w / 2 - 0.04)
+        parts.append(M.box_between((x - 0.0125, -d / 2 + 0.02, 0.0), (x + 0.0125, d / 2 - 0.03,
+                                                                        h - t)))
+    parts.append(M.box_between((-w / 2 + 0.06, -d / 2 + 0.06, h - t - 0.40),
+                               (w / 2 - 0.06, -d / 2 + 0.078, h - t)))
+    return make_model("desk", "table", parts,
+                      {"top_height": h, "top_width": w, "top_depth": d}, symmetry=1,
+                      description="Desk on two panel legs with a modesty panel at the back.")
+
+
+@functools.lru_cache(maxsize=1)
+def builtin_library() -> ModelLibrary:
+    """The built-in generic models (cached: their samples and trees are built once).
+
+    Examples
+    --------
+    >>> [m.name for m in builtin_library().for_label("sofa")]
+    ['sofa-2seat', 'sofa-3seat']
+    """
+    return ModelLibrary([
+        _chair_4leg(arms=False),
+        _chair_4leg(arms=True),
+        _chair_office(),
+        _upholstered("armchair", "chair", 0.56, 1, 0.16, 0.85, SOFA_SEAT_HEIGHT, 0.85,
+                     "Upholstered armchair."),
+        _upholstered("sofa-2seat", "sofa", 1.20, 2, 0.18, 0.90, SOFA_SEAT_HEIGHT, 0.85,
+                     "Two-seat sofa with arms."),
+        _upholstered("sofa-3seat", "sofa", 1.80, 3, 0.18, 0.92, SOFA_SEAT_HEIGHT, 0.85,
+                     "Three-seat sofa with arms."),
+        _rect_table("table-rectangular", 1.60, 0.90, TABLE_HEIGHT, 2,
+                    "Rectangular dining table on four legs with an apron."),
+        _rect_table("table-square", 0.80, 0.80, TABLE_HEIGHT, 4,
+                    "Square table on four legs with an apron."),
+        _round_table(),
+        _rect_table("table-coffee", 1.10, 0.60, COFFEE_TABLE_HEIGHT, 2,
+                    "Low coffee table on four legs.", apron=False),
+        _desk(),
+    ])

@@ -1,0 +1,684 @@
+"""Calibrating an ontology's Gaussians on labelled scans, checked on scans kept aside.
+
+For every ground-truth object of a class in the calibration scenes, the segmentation
+cluster that overlaps it most (point IoU, at least :data:`MIN_CLUSTER_IOU`) is scored
+against the class with :func:`~ontodetect.ontology.score_class`; the best assignment of
+its planes to the class's parts gives one measured value of every constraint of the
+class (part, relation and cluster features). Each Gaussian is then re-estimated by
+maximum likelihood with a floor on σ:
+
+- two-sided ``{mean, sigma}`` and ranges ``[low, high]``: μ = sample mean,
+  σ = max(sample std, :data:`PRIOR_SIGMA_SHARE` × prior σ, per-feature absolute floor);
+  a range is written back as [μ − σ, μ + σ];
+- one-sided ``{min: a}`` / ``{max: b}`` stay one-sided: the bound moves to the
+  :data:`ONE_SIDED_QUANTILE` (or 1 − it) quantile of the values, so that most objects
+  score 1, and ``soft`` (if the file has it) becomes the floored sample std.
+
+Constraints with fewer than :data:`MIN_SAMPLES` values keep their prior. The YAML
+keeps its structure (same classes, parts, relations and keys; only numbers change);
+comments are not kept.
+
+Scenes are split by :func:`split_scenes` into a calibration and a held-out set by room,
+so rescans of one room never sit on both sides; the held-out scenes are only used to
+compare detection before and after.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+from ..errors import InvalidParameterError, ReadError
+from ._dataset import (
+    DatasetEvaluation,
+    SceneSource,
+    _check_detect_options,
+    _class_ids,
+    _natural_key,
+    discover_scenes,
+    evaluate_dataset,
+    map_scenes,
+    read_scene_cloud,
+    scene_group,
+)
+from ._match import Instance, instances_from_labels, overlap_matrix
+
+__all__ = [
+    "CalibrationResult",
+    "ConstraintFit",
+    "SceneSamples",
+    "SceneSplit",
+    "calibrate_dataset",
+    "calibrate_ontology",
+    "collect_scene_samples",
+    "constraint_values",
+    "fit_gaussian",
+    "split_scenes",
+]
+
+#: A ground-truth object calibrates only through a cluster with at least this point IoU
+#: (the overlap a detection needs to count, DESIGN.md).
+MIN_CLUSTER_IOU = 0.25
+#: Constraints measured fewer times than this keep their prior.
+MIN_SAMPLES = 3
+#: σ is never below this share of the prior's σ...
+PRIOR_SIGMA_SHARE = 0.25
+#: ...nor below these absolute floors (units of the feature: m, degrees, m², ratios).
+ABS_SIGMA_FLOOR: dict[str, float] = {
+    "tilt": 1.0,
+    "angle": 2.0,
+    "height": 0.02,
+    "top": 0.02,
+    "bottom": 0.02,
+    "gap": 0.02,
+    "distance": 0.01,
+    "length": 0.03,
+    "width": 0.03,
+    "breadth": 0.03,
+    "area": 0.01,
+    "fill": 0.03,
+    "overlap": 0.03,
+    "planes": 0.5,
+}
+#: A one-sided bound moves to this quantile of the values (``min``; 1 - it for ``max``).
+ONE_SIDED_QUANTILE = 0.05
+#: Significant digits of the numbers written to the calibrated file.
+DIGITS = 4
+
+#: A constraint's place in the YAML: (class, "parts", part, feature),
+#: (class, "relations", index, feature) or (class, "cluster", feature).
+ConstraintPath = tuple[Any, ...]
+
+
+# -- split ---------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class SceneSplit:
+    """Scenes for calibration and scenes kept aside, split by room.
+
+    Attributes
+    ----------
+    calibration, held_out : list
+        The scenes (SceneSource or names), each in the order given.
+    fraction : float
+        Share of the rooms asked for calibration.
+    seed : int
+        Seed of the split.
+    """
+
+    calibration: list[Any]
+    held_out: list[Any]
+    fraction: float
+    seed: int
+
+    def groups(self, side: str) -> list[str]:
+        """Rooms on one side (``"calibration"`` or ``"held_out"``)."""
+        items = getattr(self, side)
+        return sorted({_group_of(s) for s in items}, key=_natural_key)
+
+    def describe(self) -> str:
+        """One line naming the rooms of each side and how they were drawn."""
+        cal, held = self.groups("calibration"), self.groups("held_out")
+        return (
+            f"split seed {self.seed}, {self.fraction:g} of the rooms for calibration: "
+            f"calibration {', '.join(cal)} ({len(self.calibration)} scenes); held out "
+            f"{', '.join(held) or 'none'} ({len(self.held_out)} scenes)"
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "fraction": self.fraction,
+            "seed": self.seed,
+            "calibration": [_name_of(s) for s in self.calibration],
+            "held_out": [_name_of(s) for s in self.held_out],
+            "calibration_rooms": self.groups("calibration"),
+            "held_out_rooms": self.groups("held_out"),
+        }
+
+
+def _name_of(scene: Any) -> str:
+    return scene.name if isinstance(scene, SceneSource) else str(scene)
+
+
+def _group_of(scene: Any) -> str:
+    return scene.group if isinstance(scene, SceneSource) else scene_group(str(scene))
+
+
+def split_scenes(scenes: Sequence[Any], fraction: float = 0.5, seed: int = 0) -> SceneSplit:
+    """Split scenes into calibration and held-out sets, keeping each room on one side.
+
+    Rooms (:func:`~ontodetect.evaluation.scene_group`: ``scene0000_00``, ``_01`` and
+    ``_02`` are one room) are put in natural order and shuffled with ``seed``; the
+    first ``round(fraction × rooms)`` go to calibration (at least one room on each
+    side when ``fraction < 1``; ``fraction = 1`` keeps nothing aside).
+
+    Parameters
+    ----------
+    scenes : sequence of SceneSource or str
+    fraction : float
+        Share of the rooms used for calibration, in (0, 1].
+    seed : int
+
+    Examples
+    --------
+    >>> s = split_scenes(["scene0000_00", "scene0000_01", "scene0002_00", "scene0003_00"],
+    ...                  0.5, seed=1)
+    >>> sorted(s.groups("calibration") + s.groups("held_out"))
+    ['scene0000', 'scene0002', 'scene0003']
+    """
+    if isinstance(fraction, bool) or not isinstance(fraction, (int, float)) or not (
+        0.0 < fraction <= 1.0
+    ):
+        raise InvalidParameterError("split", "a share of the rooms in (0, 1]", fraction)
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise InvalidParameterError("seed", "a non-negative integer", seed)
+    items = list(scenes)
+    groups = sorted({_group_of(s) for s in items}, key=_natural_key)
+    if not groups:
+        raise InvalidParameterError("scenes", "at least one scene", "none")
+    if fraction < 1.0 and len(groups) < 2:
+        raise InvalidParameterError(
+            "split", "1 (no held-out scenes) for a dataset of a single room", fraction
+        )
+    order = np.random.default_rng(int(seed)).permutation(len(groups))
+    k = len(groups) if fraction >= 1.0 else int(np.clip(round(fraction * len(groups)), 1,
+                                                         len(groups) - 1))
+    chosen = {groups[i] for i in order[:k]}
+    return SceneSplit(
+        [s for s in items if _group_of(s) in chosen],
+        [s for s in items if _group_of(s) not in chosen],
+        float(fraction),
+        int(seed),
+    )
+
+
+# -- measuring -----------------------------------------------------------------------------
+def constraint_values(cls: Any, score: Any) -> dict[ConstraintPath, float]:
+    """The measured value of every constraint of a :class:`~ontodetect.ontology.ClassScore`.
+
+    Parameters
+    ----------
+    cls : ObjectClass
+        The class scored.
+    score : ClassScore
+        ``score_class(cls, description)``: its constraints hold the values of the best
+        assignment (parts without a plane and relations involving them have none).
+
+    Returns
+    -------
+    dict
+        Constraint path -> finite value.
+    """
+    parts = {p.name for p in cls.parts}
+    used: set[tuple[int, str]] = set()
+    out: dict[ConstraintPath, float] = {}
+    for cv in score.constraints:
+        if cv.gaussian is None or cv.value is None or not math.isfinite(cv.value):
+            continue
+        path: ConstraintPath | None = None
+        if cv.part == "cluster":
+            path = (cls.name, "cluster", cv.feature)
+        elif cv.part in parts:
+            path = (cls.name, "parts", cv.part, cv.feature)
+        else:
+            for i, rel in enumerate(cls.relations):
+                if (f"{rel.a}~{rel.b}" == cv.part and cv.feature in rel.constraints
+                        and (i, cv.feature) not in used):
+                    used.add((i, cv.feature))
+                    path = (cls.name, "relations", i, cv.feature)
+                    break
+        if path is not None:
+            out[path] = float(cv.value)
+    return out
+
+
+@dataclass(frozen=True)
+class SceneSamples:
+    """Constraint values measured in one calibration scene.
+
+    Attributes
+    ----------
+    name : str
+    values : dict
+        Constraint path -> list of values (one per object that calibrated it).
+    used, skipped : dict of str to int
+        Objects per class that gave values, and that had no cluster with point IoU
+        >= :data:`MIN_CLUSTER_IOU`.
+    error : str or None
+    """
+
+    name: str
+    values: dict[ConstraintPath, list[float]] = field(default_factory=dict)
+    used: dict[str, int] = field(default_factory=dict)
+    skipped: dict[str, int] = field(default_factory=dict)
+    error: str | None = None
+
+
+def collect_scene_samples(
+    source: SceneSource,
+    ontology: Any,
+    *,
+    class_ids: Mapping[int, str] | None = None,
+    segment_options: Mapping[str, Any] | None = None,
+    min_iou: float = MIN_CLUSTER_IOU,
+) -> SceneSamples:
+    """Measure every constraint on the ground-truth objects of one scene.
+
+    Parameters
+    ----------
+    source : SceneSource
+    ontology : Ontology
+        The classes whose constraints are measured.
+    class_ids : mapping of int to str, optional
+        Ground-truth class id -> ontology class name; from the classes' ``matches`` by
+        default (including classes that are not reported, such as stools).
+    segment_options : mapping, optional
+        ``config``, ``seed``, ``up``, ``scale`` of :func:`ontodetect.segment.segment`.
+    min_iou : float
+        Least point IoU between an object and its cluster.
+    """
+    from ..errors import OntoDetectError
+    from ..ontology import score_class
+    from ..pipeline import describe_cluster
+    from ..segment import segment
+
+    opts = dict(segment_options or {})
+    ids = _class_ids(ontology, reported_only=False, attr="name") if class_ids is None else class_ids
+    try:
+        cloud = read_scene_cloud(source)
+        gts = instances_from_labels(cloud.fields["instance"], cloud.fields["class_id"], ids)
+        if not gts:
+            return SceneSamples(source.name)
+        seg = segment(cloud, opts.get("config"), seed=opts.get("seed", 0), up=opts.get("up"),
+                      scale=opts.get("scale"))
+    except OntoDetectError as exc:
+        return SceneSamples(source.name, error=str(exc))
+    clusters = [Instance.make(k, "cluster", c.point_indices) for k, c in enumerate(seg)]
+    iou, _ = overlap_matrix(clusters, gts)
+    values: dict[ConstraintPath, list[float]] = {}
+    used: dict[str, int] = {}
+    skipped: dict[str, int] = {}
+    for g, gt in enumerate(gts):
+        if not clusters or iou[:, g].max() < min_iou:
+            skipped[gt.label] = skipped.get(gt.label, 0) + 1
+            continue
+        k = int(np.argmax(iou[:, g]))
+        cls = ontology[gt.label]
+        score = score_class(cls, describe_cluster(seg[k]))
+        for path, v in constraint_values(cls, score).items():
+            values.setdefault(path, []).append(v)
+        used[gt.label] = used.get(gt.label, 0) + 1
+    return SceneSamples(source.name, values, used, skipped)
+
+
+# -- fitting -------------------------------------------------------------------------------
+def sigma_floor(prior: Any, feature: str) -> float:
+    """The least σ a calibrated constraint may have."""
+    return max(PRIOR_SIGMA_SHARE * prior.sigma, ABS_SIGMA_FLOOR.get(feature, 0.0))
+
+
+def fit_gaussian(prior: Any, values: Sequence[float], feature: str) -> Any:
+    """Maximum-likelihood re-estimate of one constraint, with floors; keeps its side.
+
+    Parameters
+    ----------
+    prior : Gaussian
+        The constraint as the ontology has it.
+    values : sequence of float
+        Measured values.
+    feature : str
+        Feature name (selects the absolute σ floor).
+
+    Returns
+    -------
+    Gaussian
+        The prior itself with fewer than :data:`MIN_SAMPLES` values.
+
+    Examples
+    --------
+    >>> from ontodetect.ontology import Gaussian
+    >>> g = fit_gaussian(Gaussian(0.55, 0.2), [0.44, 0.46, 0.48], "height")
+    >>> round(g.mean, 3), round(g.sigma, 3)   # std 0.016 is below 25 % of 0.2
+    (0.46, 0.05)
+    """
+    from ..ontology import Gaussian
+
+    x = np.asarray(values, dtype=np.float64)
+    x = x[np.isfinite(x)]
+    if len(x) < MIN_SAMPLES:
+        return prior
+    sigma = max(float(x.std()), sigma_floor(prior, feature))
+    if prior.side == "min":
+        return Gaussian(float(np.quantile(x, ONE_SIDED_QUANTILE)), sigma, "min")
+    if prior.side == "max":
+        return Gaussian(float(np.quantile(x, 1.0 - ONE_SIDED_QUANTILE)), sigma, "max")
+    return Gaussian(float(x.mean()), sigma)
+
+
+@dataclass(frozen=True)
+class ConstraintFit:
+    """One constraint before and after calibration."""
+
+    path: ConstraintPath
+    before: Any
+    after: Any
+    samples: int
+
+    @property
+    def name(self) -> str:
+        """Dotted place in the file: ``chair.parts.seat.height``, ``chair.relations[0].gap``."""
+        out = ""
+        for p in self.path:
+            out += f"[{p}]" if isinstance(p, int) else (f".{p}" if out else str(p))
+        return out
+
+    @property
+    def changed(self) -> bool:
+        return self.after is not self.before
+
+    def to_dict(self) -> dict[str, Any]:
+        def g(x: Any) -> dict[str, Any]:
+            return {"mean": x.mean, "sigma": x.sigma, "side": x.side}
+
+        return {"constraint": self.name, "samples": self.samples, "before": g(self.before),
+                "after": g(self.after)}
+
+
+def _round(v: float, digits: int = DIGITS) -> float:
+    r = float(f"{v:.{digits}g}")
+    return 0.0 if r == 0 else r
+
+
+def _write_spec(spec: Any, g: Any) -> Any:
+    """The YAML value of a constraint in its original form, with ``g``'s numbers."""
+    # More digits when rounding would collapse a narrow range onto one number.
+    for digits in range(DIGITS, 16):
+        if isinstance(spec, list) or (isinstance(spec, dict) and "range" in spec):
+            lo, hi = _round(g.mean - g.sigma, digits), _round(g.mean + g.sigma, digits)
+            if hi <= lo:
+                continue
+            return [lo, hi] if isinstance(spec, list) else {**spec, "range": [lo, hi]}
+        if isinstance(spec, dict) and "mean" in spec:
+            s = _round(g.sigma, digits)
+            if s <= 0:
+                continue
+            return {**spec, "mean": _round(g.mean, digits), "sigma": s}
+        for side in ("min", "max"):
+            if isinstance(spec, dict) and side in spec:
+                out = {**spec, side: _round(g.mean, digits)}
+                if "soft" in spec:
+                    out["soft"] = _round(g.sigma, digits)
+                    if out["soft"] <= 0:
+                        break
+                return out
+        else:
+            return spec
+    return spec
+
+
+def _spec_at(data: dict[str, Any], path: ConstraintPath) -> tuple[Any, Any]:
+    """(container, key) of a constraint's value in the parsed YAML."""
+    cls = data["classes"][path[0]]
+    if path[1] == "cluster":
+        return cls["cluster"], path[2]
+    if path[1] == "parts":
+        return cls["parts"][path[2]], path[3]
+    return cls["relations"][path[2]], path[3]
+
+
+class _Dumper(yaml.SafeDumper):
+    """Flow style for constraint mappings and number lists, block style around them."""
+
+
+def _represent_dict(dumper: yaml.SafeDumper, data: dict[str, Any]) -> yaml.Node:
+    flow = all(not isinstance(v, dict) and not (isinstance(v, list) and any(
+        isinstance(x, (dict, list)) for x in v)) for v in data.values()) and len(data) <= 4
+    return dumper.represent_mapping("tag:yaml.org,2002:map", data, flow_style=flow)
+
+
+def _represent_list(dumper: yaml.SafeDumper, data: list[Any]) -> yaml.Node:
+    flow = all(not isinstance(v, (dict, list)) for v in data)
+    return dumper.represent_sequence("tag:yaml.org,2002:seq", data, flow_style=flow)
+
+
+_Dumper.add_representer(dict, _represent_dict)
+_Dumper.add_representer(list, _represent_list)
+
+
+def _constraint_paths(ontology: Any) -> list[tuple[ConstraintPath, Any]]:
+    out = []
+    for cls in ontology.classes:
+        for feature, g in cls.cluster.constraints.items():
+            out.append(((cls.name, "cluster", feature), g))
+        for part in cls.parts:
+            for feature, g in part.constraints.items():
+                out.append(((cls.name, "parts", part.name, feature), g))
+        for i, rel in enumerate(cls.relations):
+            for feature, g in rel.constraints.items():
+                out.append(((cls.name, "relations", i, feature), g))
+    return out
+
+
+def calibrate_ontology(
+    text: str,
+    values: Mapping[ConstraintPath, Sequence[float]],
+    *,
+    source: str | None = None,
+    comment: str | None = None,
+) -> tuple[str, list[ConstraintFit]]:
+    """Re-estimate an ontology file's constraints from measured values.
+
+    Parameters
+    ----------
+    text : str
+        The ontology's YAML.
+    values : mapping
+        Constraint path (see :func:`constraint_values`) -> measured values.
+    source : str, optional
+        Name of the file, for error messages.
+    comment : str, optional
+        Written as ``#`` lines at the top of the new file.
+
+    Returns
+    -------
+    text : str
+        The calibrated YAML: same classes, parts, relations and keys, new numbers;
+        comments of the original are not kept.
+    fits : list of ConstraintFit
+        Every constraint, in file order, before and after.
+    """
+    from ..ontology import parse_ontology
+
+    ontology = parse_ontology(text, source)
+    data = yaml.safe_load(text)
+    fits = []
+    for path, prior in _constraint_paths(ontology):
+        vals = list(values.get(path, ()))
+        after = fit_gaussian(prior, vals, path[-1])
+        fits.append(ConstraintFit(path, prior, after, len(vals)))
+        if after is not prior:
+            container, key = _spec_at(data, path)
+            container[key] = _write_spec(container[key], after)
+    body = yaml.dump(data, Dumper=_Dumper, sort_keys=False, allow_unicode=True, width=96)
+    head = "".join(f"# {line}\n" if line else "#\n" for line in (comment or "").splitlines())
+    new_text = head + body
+    parse_ontology(new_text, source)  # the result must be a valid ontology
+    return new_text, fits
+
+
+# -- the whole procedure -------------------------------------------------------------------
+@dataclass(frozen=True)
+class CalibrationResult:
+    """A calibrated ontology and how it was made and checked.
+
+    Attributes
+    ----------
+    text : str
+        The calibrated ontology file.
+    ontology : Ontology
+        Parsed from ``text``.
+    base : Ontology
+        The ontology calibrated.
+    split : SceneSplit
+    fits : list of ConstraintFit
+    used, skipped : dict of str to int
+        Ground-truth objects per class that gave values / had no cluster to measure.
+    before, after : DatasetEvaluation or None
+        Detection on the held-out scenes with ``base`` and with ``ontology``.
+    failed : list of str
+        Calibration scenes that could not be read, with the reason.
+    """
+
+    text: str
+    ontology: Any
+    base: Any
+    split: SceneSplit
+    fits: list[ConstraintFit]
+    used: dict[str, int]
+    skipped: dict[str, int]
+    before: DatasetEvaluation | None = None
+    after: DatasetEvaluation | None = None
+    failed: list[str] = field(default_factory=list)
+
+    def comparison(self) -> list[dict[str, Any]]:
+        """Per class and overall: precision and recall on the held-out scenes, before/after."""
+        if self.before is None or self.after is None:
+            return []
+        rows = []
+        b, a = self.before.primary, self.after.primary
+        for c in [*b.classes, "overall"]:
+            mb = b.overall if c == "overall" else b.per_class[c]
+            ma = a.overall if c == "overall" else a.per_class[c]
+            rows.append({"class": c, "ground_truth": mb.num_gt,
+                         "precision_before": mb.precision, "recall_before": mb.recall,
+                         "precision_after": ma.precision, "recall_after": ma.recall,
+                         "detections_before": mb.num_pred, "detections_after": ma.num_pred})
+        return rows
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "split": self.split.to_dict(),
+            "used": self.used,
+            "skipped": self.skipped,
+            "failed": self.failed,
+            "constraints": [f.to_dict() for f in self.fits],
+            "held_out": self.comparison(),
+            "criterion": "point IoU >= 0.25",
+        }
+
+
+@functools.cache
+def _builtin_text() -> str:
+    return resources.files("ontodetect").joinpath("data/furniture.yaml").read_text("utf-8")
+
+
+def _read_text(path: str | os.PathLike[str]) -> str:
+    p = Path(path)
+    try:
+        return p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ReadError(p, "no such ontology file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ReadError(p, f"cannot read the ontology ({exc})") from exc
+
+
+def calibrate_dataset(
+    path: str | os.PathLike[str],
+    *,
+    base: str | os.PathLike[str] | None = None,
+    format: str = "auto",
+    split: float = 0.5,
+    seed: int = 0,
+    jobs: int = 1,
+    detect_options: Mapping[str, Any] | None = None,
+    min_iou: float = MIN_CLUSTER_IOU,
+    evaluate: bool = True,
+    scenes: Sequence[SceneSource] | None = None,
+) -> CalibrationResult:
+    """Calibrate an ontology on part of a labelled dataset; compare on the rest.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        Labelled dataset (see :func:`~ontodetect.evaluation.discover_scenes`).
+    base : path, optional
+        Ontology file to calibrate; the built-in furniture ontology by default.
+    format : str
+        Dataset layout or "auto".
+    split : float
+        Share of the rooms used for calibration (see :func:`split_scenes`).
+    seed : int
+        Seed of the split.
+    jobs : int
+        Worker processes.
+    detect_options : mapping, optional
+        Keyword arguments of :func:`ontodetect.pipeline.detect` (not ``ontology``):
+        ``config``, ``seed``, ``up`` and ``scale`` also drive the segmentation that
+        calibration measures.
+    min_iou : float
+        Least point IoU between an object and the cluster that measures it.
+    evaluate : bool
+        Detect on the held-out scenes with the base and the calibrated ontology.
+    scenes : sequence of SceneSource, optional
+        Use these instead of discovering ``path``'s scenes.
+
+    Returns
+    -------
+    CalibrationResult
+    """
+    from ..ontology import parse_ontology
+
+    opts = _check_detect_options(detect_options)
+    if "ontology" in opts:
+        raise InvalidParameterError("detect_options", "without 'ontology' (use base=)",
+                                    "ontology")
+    if not 0.0 < min_iou <= 1.0:
+        raise InvalidParameterError("min_iou", "a number in (0, 1]", min_iou)
+    text = _builtin_text() if base is None else _read_text(base)
+    source = "builtin:furniture.yaml" if base is None else str(base)
+    base_onto = parse_ontology(text, source)
+    units = list(scenes) if scenes is not None else discover_scenes(path, format)
+    parts = split_scenes(units, split, seed)
+
+    seg_opts = {k: opts[k] for k in ("config", "seed", "up", "scale") if k in opts}
+    work = functools.partial(collect_scene_samples, ontology=base_onto,
+                             segment_options=seg_opts, min_iou=min_iou)
+    samples = map_scenes(work, parts.calibration, jobs=jobs, description="Measuring objects")
+    values: dict[ConstraintPath, list[float]] = {}
+    used: dict[str, int] = {}
+    skipped: dict[str, int] = {}
+    failed = []
+    for s in samples:  # scene order: the same values in the same order for any ``jobs``
+        if s.error is not None:
+            failed.append(f"{s.name}: {s.error}")
+            continue
+        for p, v in s.values.items():
+            values.setdefault(p, []).extend(v)
+        for d, src in ((used, s.used), (skipped, s.skipped)):
+            for k, n in src.items():
+                d[k] = d.get(k, 0) + n
+    name = Path(path).name or str(path)
+    comment = (
+        f"Calibrated by 'ontodetect calibrate' from {source} on {name}: "
+        f"{sum(used.values())} objects ({', '.join(f'{n} {c}' for c, n in sorted(used.items()))})"
+        f"\nin {len(parts.calibration)} scenes; {parts.describe()}."
+        "\nOnly numbers changed; the comments of the original file are not kept."
+    )
+    new_text, fits = calibrate_ontology(text, values, source=source, comment=comment)
+    new_onto = parse_ontology(new_text, source)
+    before = after = None
+    if evaluate and parts.held_out:
+        before = evaluate_dataset(path, jobs=jobs, detect_options={**opts, "ontology": base_onto},
+                                  scenes=parts.held_out, on_error="skip")
+        after = evaluate_dataset(path, jobs=jobs, detect_options={**opts, "ontology": new_onto},
+                                 scenes=parts.held_out, on_error="skip")
+    return CalibrationResult(new_text, new_onto, base_onto, parts, fits, used, skipped, before,
+                             after, failed)

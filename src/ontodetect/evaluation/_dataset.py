@@ -1,0 +1,726 @@
+"""Evaluating a whole dataset: find its scenes, detect in each, match, aggregate.
+
+A dataset is a folder in one of four layouts (or one scene of them):
+
+- ``ontodetect``: what ``ontodetect synth`` writes, ``scene_0000/cloud.ply`` + ``objects.json``
+  + ``scene.json`` (or one such folder);
+- ``scannet-votenet``: many scans side by side, ``<scene>_vert.npy`` + ``_sem_label.npy`` +
+  ``_ins_label.npy``;
+- ``scannet``: a release scan folder (``*_vh_clean_2.ply`` + aggregation + segments), or a
+  folder of them;
+- ``s3dis``: a room folder holding ``Annotations/``, an area of rooms, or a folder of areas.
+
+Each scene is an independent unit of work: :func:`evaluate_scene` reads it, runs
+:func:`ontodetect.pipeline.detect` (or reads stored detections) and returns a
+:class:`SceneOutcome`; :func:`summarize_outcomes` merges the outcomes in scene order into a
+:class:`DatasetEvaluation`. :func:`evaluate_dataset` is that map and merge, run in worker
+processes with ``jobs > 1``; any other engine that maps a function over a list can run it
+the same way (DESIGN.md, "Scale").
+"""
+
+from __future__ import annotations
+
+import functools
+import multiprocessing
+import os
+import re
+import time
+from collections.abc import Callable, Mapping, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, TypeVar
+
+import numpy as np
+
+from .._progress import progress
+from ..cloud import PointCloud
+from ..errors import (
+    CorruptFileError,
+    InvalidParameterError,
+    OntoDetectError,
+    ReadError,
+    UnsupportedFormatError,
+)
+from ._match import Instance, instances_from_labels
+from ._metrics import Evaluation, SceneResult, evaluate_scenes
+
+__all__ = [
+    "CRITERIA",
+    "DATASET_FORMATS",
+    "DatasetEvaluation",
+    "LoadedScene",
+    "SceneError",
+    "SceneOutcome",
+    "SceneSource",
+    "discover_scenes",
+    "evaluate_dataset",
+    "evaluate_scene",
+    "evaluation_classes",
+    "load_scene",
+    "read_scene_detections",
+    "scene_group",
+    "summarize_outcomes",
+]
+
+#: Dataset layouts :func:`discover_scenes` knows ("auto" guesses per folder).
+DATASET_FORMATS = ("auto", "ontodetect", "scannet", "scannet-votenet", "s3dis")
+#: Other names accepted for a layout.
+FORMAT_ALIASES = {"synth": "ontodetect", "votenet": "scannet-votenet"}
+#: The three ways a detection is scored: key -> (criterion, IoU threshold). DESIGN.md:
+#: point IoU >= 0.25 counts, 0.5 is reported too; the centre distance of Günther et al.
+CRITERIA: dict[str, tuple[str, float]] = {
+    "iou@0.25": ("iou", 0.25),
+    "iou@0.5": ("iou", 0.5),
+    "distance": ("distance", 0.25),
+}
+#: The criterion reports lead with.
+PRIMARY = "iou@0.25"
+#: Folder levels below the dataset folder searched for scenes (dataset / area / room).
+MAX_DEPTH = 2
+#: Format tag of the JSON form of a dataset evaluation.
+EVALUATION_FORMAT = "ontodetect.evaluation/1"
+
+_VOTENET_SUFFIX = "_vert.npy"
+_SCANNET_MESH = "_vh_clean_2.ply"
+_SCAN_ID = re.compile(r"(scene\d{4})_\d{2}")
+_DETECT_KEYS = (
+    "config", "ontology", "room", "indoor", "threshold", "beta", "none_likelihood",
+    "context", "seed", "up", "scale",
+)  # fmt: skip
+
+
+class SceneError(OntoDetectError):
+    """One scene of a dataset could not be evaluated; the message names the scene."""
+
+    def __init__(self, scene: str, problem: str) -> None:
+        self.scene = scene
+        self.problem = problem
+        super().__init__(f"scene {scene}: {problem}")
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (SceneError, (self.scene, self.problem))
+
+
+# -- discovery -----------------------------------------------------------------------------
+@dataclass(frozen=True)
+class SceneSource:
+    """Where one scene of a dataset is and how to read it.
+
+    Attributes
+    ----------
+    name : str
+        Unique within the dataset: the scan id (``scene0000_00``) or the folder's path
+        relative to the dataset folder (``scene_0003``, ``Area_1/office_2``). Stored
+        detections are looked up as ``<detections dir>/<name>/detections.json``.
+    path : str
+        The scene folder, or the ``*_vert.npy`` file of a VoteNet scan.
+    format : str
+        ``ontodetect``, ``scannet``, ``scannet-votenet`` or ``s3dis``.
+    group : str
+        Scans of the same space share a group (rescans ``scene0000_00``/``_01`` are
+        group ``scene0000``); calibration keeps a group on one side of a split.
+    """
+
+    name: str
+    path: str
+    format: str
+    group: str
+
+
+def scene_group(name: str) -> str:
+    """The room a scan belongs to: ScanNet rescans of one space share it.
+
+    Examples
+    --------
+    >>> scene_group("scene0000_02"), scene_group("val/scene0011_01"), scene_group("office_1")
+    ('scene0000', 'val/scene0011', 'office_1')
+    """
+    m = _SCAN_ID.search(name)
+    if m is None:
+        return name
+    return name[: m.start()] + m.group(1)
+
+
+def _natural_key(text: str) -> list[Any]:
+    # office_2 before office_10
+    return [int(t) if t.isdigit() else t for t in re.split(r"(\d+)", text)]
+
+
+def _folder_layout(folder: Path) -> str | None:
+    """The layout of a folder that holds exactly one scene, or None."""
+    if (folder / "scene.json").is_file() and (folder / "cloud.ply").is_file():
+        return "ontodetect"
+    if (folder / "Annotations").is_dir():
+        return "s3dis"
+    if any(folder.glob(f"*{_SCANNET_MESH}")):
+        return "scannet"
+    return None
+
+
+def _normalise_format(fmt: str) -> str:
+    name = FORMAT_ALIASES.get(str(fmt).lower(), str(fmt).lower())
+    if name not in DATASET_FORMATS:
+        raise InvalidParameterError("format", f"one of {', '.join(DATASET_FORMATS)}", fmt)
+    return name
+
+
+def _scenes_in(folder: Path, root: Path, fmt: str, depth: int) -> list[SceneSource]:
+    rel = folder.relative_to(root).as_posix()
+    layout = _folder_layout(folder)
+    if layout is not None and fmt in ("auto", layout):
+        name = folder.name if rel == "." else rel
+        return [SceneSource(name, str(folder), layout, scene_group(name))]
+    out = []
+    if fmt in ("auto", "scannet-votenet"):
+        prefix = "" if rel == "." else f"{rel}/"
+        for vert in folder.glob(f"*{_VOTENET_SUFFIX}"):
+            name = prefix + vert.name[: -len(_VOTENET_SUFFIX)]
+            out.append(SceneSource(name, str(vert), "scannet-votenet", scene_group(name)))
+    if depth < MAX_DEPTH:
+        for sub in folder.iterdir():
+            if sub.is_dir() and not sub.name.startswith((".", "__")):
+                out += _scenes_in(sub, root, fmt, depth + 1)
+    return out
+
+
+def discover_scenes(path: str | os.PathLike[str], format: str = "auto") -> list[SceneSource]:
+    """Find the scenes of a dataset folder (or the one scene a path is).
+
+    Parameters
+    ----------
+    path : str or PathLike
+        A dataset folder, a scene folder, or a scene's file (``*_vert.npy``,
+        ``*_vh_clean_2.ply``, a synthetic scene's ``cloud.ply``).
+    format : {"auto", "ontodetect", "scannet", "scannet-votenet", "s3dis"}
+        Layout to look for; "auto" recognises each folder by its files. Folders are
+        searched up to two levels deep (dataset / area / room).
+
+    Returns
+    -------
+    list of SceneSource
+        In natural order of their names (``office_2`` before ``office_10``).
+
+    Raises
+    ------
+    ReadError
+        The path does not exist or holds no scene of the layout asked for.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib, numpy as np
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> for s in ("scene0001_00", "scene0001_01"):
+    ...     np.save(d / f"{s}_vert.npy", np.zeros((1, 6), np.float32))
+    >>> [(s.name, s.format, s.group) for s in discover_scenes(d)]
+    [('scene0001_00', 'scannet-votenet', 'scene0001'), ('scene0001_01', 'scannet-votenet', 'scene0001')]
+    """  # noqa: E501
+    fmt = _normalise_format(format)
+    p = Path(path)
+    if not p.exists():
+        raise ReadError(p, "no such file or folder")
+    if p.is_file():
+        name = p.name
+        for suffix in (_VOTENET_SUFFIX, "_sem_label.npy", "_ins_label.npy"):
+            if name.endswith(suffix) and fmt in ("auto", "scannet-votenet"):
+                scene = name[: -len(suffix)]
+                vert = p.with_name(scene + _VOTENET_SUFFIX)
+                return [SceneSource(scene, str(vert), "scannet-votenet", scene_group(scene))]
+        layout = _folder_layout(p.parent)
+        if layout is not None and fmt in ("auto", layout):
+            return [SceneSource(p.parent.name, str(p.parent), layout, scene_group(p.parent.name))]
+        raise UnsupportedFormatError(
+            p, "is not a scene of a known dataset layout", list(DATASET_FORMATS[1:])
+        )
+    found = _scenes_in(p, p, fmt, 0)
+    if not found:
+        what = "any known layout" if fmt == "auto" else f"the {fmt!r} layout"
+        raise ReadError(
+            p,
+            f"holds no scene of {what} (looked for synthetic scenes with scene.json + "
+            f"cloud.ply, *{_VOTENET_SUFFIX}, *{_SCANNET_MESH} and S3DIS Annotations/ "
+            f"up to {MAX_DEPTH} folders deep)",
+        )
+    return sorted(found, key=lambda s: _natural_key(s.name))
+
+
+# -- loading -------------------------------------------------------------------------------
+def _class_ids(ontology: Any, *, reported_only: bool, attr: str) -> dict[int, str]:
+    from ..io._labels import NYU40_NAMES
+    from ..synth.scene import CLASS_IDS
+
+    ids = {name: cid for name, cid in CLASS_IDS.items() if cid > 0}
+    ids.update({name: cid for cid, name in NYU40_NAMES.items() if cid > 0})
+    out: dict[int, str] = {}
+    for cls in ontology.classes:
+        if reported_only and not cls.detect:
+            continue
+        for match in cls.matches:
+            cid = ids.get(match.lower().replace("_", " "), ids.get(match.lower()))
+            if cid is not None:
+                out.setdefault(cid, getattr(cls, attr))
+    return dict(sorted(out.items()))
+
+
+def evaluation_classes(ontology: Any = None) -> dict[int, str]:
+    """Ground-truth class id -> evaluated class, from an ontology's ``matches``.
+
+    Ids are NYU40 (ScanNet, and S3DIS as mapped by its reader) or the simulator's
+    (:data:`ontodetect.synth.CLASS_IDS`). Only classes that are reported
+    (``detect: true``) are evaluated, under their ``label``.
+
+    Examples
+    --------
+    >>> evaluation_classes()
+    {5: 'chair', 6: 'sofa', 7: 'table', 14: 'table'}
+    """
+    if ontology is None:
+        from ..ontology import builtin_ontology
+
+        ontology = builtin_ontology()
+    return _class_ids(ontology, reported_only=True, attr="label")
+
+
+@dataclass(frozen=True)
+class LoadedScene:
+    """A scene read from disk: the cloud and its ground-truth instances."""
+
+    source: SceneSource
+    cloud: PointCloud
+    gts: list[Instance]
+
+    @property
+    def num_points(self) -> int:
+        """Rows of the input file (what detections' ``point_indices`` index)."""
+        return int(self.cloud.index.max()) + 1 if len(self.cloud) else 0
+
+
+def read_scene_cloud(source: SceneSource) -> PointCloud:
+    """The scene's points with per-point ``instance`` and ``class_id`` fields."""
+    from ..io import read_cloud
+
+    path = Path(source.path)
+    if source.format == "ontodetect":
+        from ..synth import load_synth
+
+        cloud, _, _ = load_synth(path)
+    else:
+        cloud = read_cloud(path, format=source.format)
+    missing = [k for k in ("instance", "class_id") if k not in cloud.fields]
+    if missing:
+        raise CorruptFileError(path, f"has no per-point {' and '.join(missing)} labels")
+    return cloud
+
+
+def load_scene(source: SceneSource, class_ids: Mapping[int, str] | None = None) -> LoadedScene:
+    """Read a scene and its ground-truth instances.
+
+    Parameters
+    ----------
+    source : SceneSource
+        From :func:`discover_scenes`.
+    class_ids : mapping of int to str, optional
+        Which class ids are evaluated and under which name; :func:`evaluation_classes`
+        of the built-in ontology by default.
+
+    Returns
+    -------
+    LoadedScene
+        Instances index the rows of the input file, like detections do.
+    """
+    cloud = read_scene_cloud(source)
+    class_ids = evaluation_classes() if class_ids is None else class_ids
+    gts = instances_from_labels(
+        cloud.fields["instance"], cloud.fields["class_id"], class_ids,
+        xyz=cloud.xyz, index=cloud.index,
+    )  # fmt: skip
+    return LoadedScene(source, cloud, gts)
+
+
+def read_scene_detections(
+    detections_dir: str | os.PathLike[str], scene: str, num_points: int | None = None
+) -> list[Instance]:
+    """Stored detections of one scene, ``<detections_dir>/<scene>/detections.json``.
+
+    Parameters
+    ----------
+    num_points : int, optional
+        Rows of the scene's input file; a document written for another scan is refused.
+    """
+    from ..io._detections import read_detections
+
+    path = Path(detections_dir) / scene / "detections.json"
+    doc = read_detections(path)
+    if num_points is not None and doc["num_points"] != num_points:
+        raise CorruptFileError(
+            path,
+            f"num_points is {doc['num_points']}, but scene {scene} has {num_points} points: "
+            "these detections belong to another scan",
+        )
+    return [
+        Instance.make(d["id"], d["label"], d["point_indices"], float(d["score"]),
+                      d["box"]["center"])
+        for d in doc["detections"]
+    ]  # fmt: skip
+
+
+# -- one scene -----------------------------------------------------------------------------
+@dataclass(frozen=True)
+class SceneOutcome:
+    """What evaluating one scene gave: detections, ground truth, times, or the error.
+
+    Attributes
+    ----------
+    name : str
+    source : SceneSource
+    preds, gts : tuple of Instance
+        Detections and ground-truth instances (rows of the input file).
+    num_points : int
+        Rows of the input file.
+    seconds : float
+        Time of the detection (0 when stored detections were read).
+    load_seconds : float
+        Time to read the scene (and stored detections).
+    timings : dict of str to float
+        Seconds per pipeline stage.
+    error : str or None
+        Why the scene failed; the other fields are then empty.
+    """
+
+    name: str
+    source: SceneSource
+    preds: tuple[Instance, ...] = ()
+    gts: tuple[Instance, ...] = ()
+    num_points: int = 0
+    seconds: float = 0.0
+    load_seconds: float = 0.0
+    timings: dict[str, float] = field(default_factory=dict)
+    error: str | None = None
+
+    @property
+    def ok(self) -> bool:
+        return self.error is None
+
+    def scene_result(self) -> SceneResult:
+        return SceneResult(self.name, self.preds, self.gts, self.seconds,
+                           {"points": self.num_points, "load_seconds": self.load_seconds})
+
+    def to_dict(self) -> dict[str, Any]:
+        out: dict[str, Any] = {
+            "scene": self.name,
+            "format": self.source.format,
+            "points": self.num_points,
+            "seconds": round(self.seconds, 3),
+            "load_seconds": round(self.load_seconds, 3),
+            "detections": len(self.preds),
+            "ground_truth": len(self.gts),
+            "timings": {k: round(v, 4) for k, v in self.timings.items()},
+        }
+        if self.error is not None:
+            out["error"] = self.error
+        return out
+
+
+def _check_detect_options(options: Mapping[str, Any] | None) -> dict[str, Any]:
+    opts = dict(options or {})
+    for key in opts:
+        if key not in _DETECT_KEYS:
+            raise InvalidParameterError(
+                "detect_options", f"a mapping with keys among {', '.join(_DETECT_KEYS)}", key
+            )
+    return opts
+
+
+def evaluate_scene(
+    source: SceneSource,
+    detect_options: Mapping[str, Any] | None = None,
+    *,
+    detections_dir: str | os.PathLike[str] | None = None,
+    save_dir: str | os.PathLike[str] | None = None,
+    class_ids: Mapping[int, str] | None = None,
+) -> SceneOutcome:
+    """Evaluate one scene: read it, detect (or read stored detections), keep both sides.
+
+    A unit of work with plain, picklable inputs and output, for any map engine.
+    Problems a user can cause (unreadable files, bad stored detections) do not
+    raise: they come back in :attr:`SceneOutcome.error`.
+
+    Parameters
+    ----------
+    source : SceneSource
+    detect_options : mapping, optional
+        Keyword arguments of :func:`ontodetect.pipeline.detect` (``config``,
+        ``ontology``, ``room``, ``threshold``, ``seed``...).
+    detections_dir : path, optional
+        Read ``<detections_dir>/<scene>/detections.json`` instead of detecting.
+    save_dir : path, optional
+        Write this scene's ``detections.json`` to ``<save_dir>/<scene>/``.
+    class_ids : mapping of int to str, optional
+        Evaluated classes (default: :func:`evaluation_classes` of the ontology used).
+    """
+    opts = _check_detect_options(detect_options)
+    if class_ids is None:
+        class_ids = evaluation_classes(opts.get("ontology"))
+    t0 = time.perf_counter()
+    try:
+        scene = load_scene(source, class_ids)
+        if detections_dir is not None:
+            preds = read_scene_detections(detections_dir, source.name, scene.num_points)
+            load = time.perf_counter() - t0
+            seconds, timings = 0.0, {}
+        else:
+            from ..pipeline import detect
+
+            load = time.perf_counter() - t0
+            t1 = time.perf_counter()
+            result = detect(scene.cloud, **opts)
+            seconds = time.perf_counter() - t1
+            timings = dict(result.timings)
+            preds = [Instance.make(d.id, d.label, d.point_indices, d.score, d.center)
+                     for d in result.detections]
+            if save_dir is not None:
+                _save_detections(result, Path(save_dir) / source.name)
+    except OntoDetectError as exc:
+        return SceneOutcome(source.name, source, error=str(exc))
+    return SceneOutcome(source.name, source, tuple(preds), tuple(scene.gts), scene.num_points,
+                        seconds, load, timings)
+
+
+def _save_detections(result: Any, folder: Path) -> None:
+    from ..errors import WriteError
+    from ..io._detections import write_detections
+
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise WriteError(folder, f"cannot create the folder ({exc.strerror})") from exc
+    doc = result.to_dict()
+    doc["classes"] = result.class_names
+    write_detections(folder / "detections.json", doc)
+
+
+# -- the map over scenes -------------------------------------------------------------------
+T = TypeVar("T")
+R = TypeVar("R")
+
+
+def _pool_context() -> multiprocessing.context.BaseContext:
+    # Never fork: the parent may hold threads (BLAS, Open3D) that a fork would copy mid-lock.
+    methods = multiprocessing.get_all_start_methods()
+    return multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
+
+
+def _check_jobs(jobs: int) -> int:
+    if isinstance(jobs, bool) or not isinstance(jobs, (int, np.integer)) or jobs < 0:
+        raise InvalidParameterError("jobs", "a non-negative integer (0: one per CPU)", jobs)
+    return int(jobs) or (os.cpu_count() or 1)
+
+
+def map_scenes(
+    fn: Callable[[T], R], units: Sequence[T], *, jobs: int = 1, description: str = "Scenes"
+) -> list[R]:
+    """``[fn(u) for u in units]``, in worker processes when ``jobs > 1``, results in order.
+
+    ``fn`` and the units must be picklable (a module-level function or a
+    :func:`functools.partial` of one). A progress bar counts finished units.
+    """
+    jobs = _check_jobs(jobs)
+    results: list[Any] = [None] * len(units)
+    with progress(description, total=len(units)) as advance:
+        if jobs == 1 or len(units) <= 1:
+            for i, unit in enumerate(units):
+                results[i] = fn(unit)
+                advance(1)
+            return results
+        workers = min(jobs, len(units))
+        with ProcessPoolExecutor(max_workers=workers, mp_context=_pool_context()) as pool:
+            futures = {pool.submit(fn, unit): i for i, unit in enumerate(units)}
+            for fut in as_completed(futures):
+                results[futures[fut]] = fut.result()
+                advance(1)
+    return results
+
+
+# -- the dataset ---------------------------------------------------------------------------
+@dataclass(frozen=True)
+class DatasetEvaluation:
+    """A dataset's evaluation at the three criteria, with every scene's outcome.
+
+    Attributes
+    ----------
+    dataset : str
+        The dataset path as given.
+    classes : list of str
+        Evaluated classes.
+    evaluations : dict of str to Evaluation
+        ``"iou@0.25"``, ``"iou@0.5"`` and ``"distance"`` (see :data:`CRITERIA`).
+    scenes : list of SceneOutcome
+        Evaluated scenes, in discovery order.
+    failed : list of SceneOutcome
+        Scenes that could not be evaluated (with ``error``).
+    options : dict
+        What produced the detections (JSON-ready).
+    jobs : int
+        Worker processes used.
+    seconds : float
+        Wall time of the whole evaluation.
+    """
+
+    dataset: str
+    classes: list[str]
+    evaluations: dict[str, Evaluation]
+    scenes: list[SceneOutcome]
+    failed: list[SceneOutcome] = field(default_factory=list)
+    options: dict[str, Any] = field(default_factory=dict)
+    jobs: int = 1
+    seconds: float = 0.0
+
+    @property
+    def primary(self) -> Evaluation:
+        """The evaluation at point IoU >= 0.25 (DESIGN.md)."""
+        return self.evaluations[PRIMARY]
+
+    def scene_seconds(self) -> dict[str, float]:
+        """Mean, median and maximum detection time per scene (s)."""
+        t = np.array([s.seconds for s in self.scenes], dtype=np.float64)
+        if not len(t):
+            return {"mean": 0.0, "median": 0.0, "max": 0.0, "total": 0.0}
+        return {"mean": float(t.mean()), "median": float(np.median(t)),
+                "max": float(t.max()), "total": float(t.sum())}
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "format": EVALUATION_FORMAT,
+            "dataset": self.dataset,
+            "classes": self.classes,
+            "options": self.options,
+            "jobs": self.jobs,
+            "seconds": round(self.seconds, 3),
+            "scene_seconds": {k: round(v, 3) for k, v in self.scene_seconds().items()},
+            "evaluations": {k: e.to_dict() for k, e in self.evaluations.items()},
+            "scenes": [s.to_dict() for s in self.scenes],
+            "failed": [s.to_dict() for s in self.failed],
+        }
+
+
+def summarize_outcomes(
+    outcomes: Sequence[SceneOutcome],
+    classes: Sequence[str],
+    *,
+    dataset: str = "",
+    options: Mapping[str, Any] | None = None,
+    jobs: int = 1,
+    seconds: float = 0.0,
+) -> DatasetEvaluation:
+    """Merge scene outcomes (in the order given) into a :class:`DatasetEvaluation`."""
+    ok = [o for o in outcomes if o.ok]
+    results = [o.scene_result() for o in ok]
+    evaluations = {
+        key: evaluate_scenes(results, classes, criterion=crit, iou_threshold=thr)
+        for key, (crit, thr) in CRITERIA.items()
+    }
+    return DatasetEvaluation(str(dataset), list(classes), evaluations, ok,
+                             [o for o in outcomes if not o.ok], dict(options or {}), jobs, seconds)
+
+
+def _jsonable_option(value: Any) -> Any:
+    if value is None or isinstance(value, (bool, int, float, str)):
+        return value
+    if isinstance(value, Mapping):
+        return {str(k): _jsonable_option(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_jsonable_option(v) for v in value]
+    return str(value)
+
+
+def describe_options(
+    options: Mapping[str, Any], detections_dir: str | os.PathLike[str] | None = None
+) -> dict[str, Any]:
+    """A JSON-ready account of what produced the detections."""
+    if detections_dir is not None:
+        return {"detections": str(detections_dir)}
+    out: dict[str, Any] = {}
+    for key, value in options.items():
+        if key == "config":
+            from ..config import Config
+
+            default = Config().to_dict()
+            changed = {
+                f"{sec}.{k}": _jsonable_option(v)
+                for sec, vals in value.to_dict().items() if isinstance(vals, dict)
+                for k, v in vals.items() if default.get(sec, {}).get(k) != v
+            }  # fmt: skip
+            out["config"] = changed or "defaults"
+        elif key == "ontology":
+            out["ontology"] = {"source": value.source, "classes": value.names}
+        else:
+            out[key] = _jsonable_option(value)
+    return out
+
+
+def evaluate_dataset(
+    path: str | os.PathLike[str],
+    *,
+    format: str = "auto",
+    jobs: int = 1,
+    detect_options: Mapping[str, Any] | None = None,
+    detections_dir: str | os.PathLike[str] | None = None,
+    save_detections: str | os.PathLike[str] | None = None,
+    on_error: str = "raise",
+    scenes: Sequence[SceneSource] | None = None,
+) -> DatasetEvaluation:
+    """Detect in every scene of a dataset and score against its ground truth.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        Dataset folder or one scene (see :func:`discover_scenes`).
+    format : str
+        Dataset layout, or "auto".
+    jobs : int
+        Worker processes (0: one per CPU). Results do not depend on it.
+    detect_options : mapping, optional
+        Keyword arguments of :func:`ontodetect.pipeline.detect`.
+    detections_dir : path, optional
+        Score stored detections (``<dir>/<scene>/detections.json``) instead of detecting.
+    save_detections : path, optional
+        Also write each scene's ``detections.json`` into ``<save_detections>/<scene>/``.
+    on_error : {"raise", "skip"}
+        A scene that cannot be evaluated stops the run with a :class:`SceneError`, or is
+        left out and listed in :attr:`DatasetEvaluation.failed`.
+    scenes : sequence of SceneSource, optional
+        Evaluate these instead of discovering ``path``'s scenes.
+
+    Returns
+    -------
+    DatasetEvaluation
+        At point IoU 0.25 and 0.5 and at the distance criterion.
+
+    Raises
+    ------
+    ReadError
+        No scene found.
+    SceneError
+        A scene failed and ``on_error="raise"``.
+    """
+    if on_error not in ("raise", "skip"):
+        raise InvalidParameterError("on_error", "'raise' or 'skip'", on_error)
+    opts = _check_detect_options(detect_options)
+    start = time.perf_counter()
+    units = list(scenes) if scenes is not None else discover_scenes(path, format)
+    ontology = opts.get("ontology")
+    class_ids = evaluation_classes(ontology)
+    classes = list(dict.fromkeys(class_ids.values()))
+    work = functools.partial(
+        evaluate_scene, detect_options=opts, detections_dir=detections_dir,
+        save_dir=save_detections, class_ids=class_ids,
+    )  # fmt: skip
+    outcomes = map_scenes(work, units, jobs=jobs, description="Evaluating scenes")
+    if on_error == "raise":
+        for o in outcomes:
+            if not o.ok:
+                raise SceneError(o.name, o.error or "failed")
+    return summarize_outcomes(
+        outcomes, classes, dataset=str(path), options=describe_options(opts, detections_dir),
+        jobs=_check_jobs(jobs), seconds=time.perf_counter() - start,
+    )  # fmt: skip
