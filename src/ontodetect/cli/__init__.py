@@ -42,7 +42,7 @@ def _register_commands() -> None:
     # arrive with the stages they expose.
     from importlib import import_module
 
-    for name in ("info", "demo", "synth", "segment", "detect", "evaluate", "cad"):
+    for name in ("info", "demo", "synth", "segment", "detect", "evaluate", "calibrate", "cad"):
         try:
             import_module(f"{__name__}.{name}")
         except ModuleNotFoundError as exc:

@@ -4,10 +4,46 @@ A detection is a true positive when its points overlap an unmatched ground-truth
 instance of the same class with IoU >= 0.25 (0.5 is reported too), matched
 greedily by descending score (DESIGN.md). NYU40 ids map to classes as ScanNet
 uses them: chair 5, sofa 6, table 7 and desk 14 (counted as table).
+
+- matching and metrics: :func:`match_instances`, :func:`evaluate_scenes`;
+- datasets: :func:`discover_scenes`, :func:`evaluate_scene` (one unit of work),
+  :func:`evaluate_dataset` (the map over scenes and the merge);
+- reports: :func:`write_report` (report.md, report.json, pr_curves.png, confusion.png);
+- calibration: :func:`calibrate_dataset`, :func:`split_scenes`, :func:`calibrate_ontology`.
 """
 
 from __future__ import annotations
 
+from ._calibrate import (
+    CalibrationResult,
+    ConstraintFit,
+    SceneSamples,
+    SceneSplit,
+    calibrate_dataset,
+    calibrate_ontology,
+    collect_scene_samples,
+    constraint_values,
+    fit_gaussian,
+    split_scenes,
+)
+from ._dataset import (
+    CRITERIA,
+    DATASET_FORMATS,
+    DatasetEvaluation,
+    LoadedScene,
+    SceneError,
+    SceneOutcome,
+    SceneSource,
+    discover_scenes,
+    evaluate_dataset,
+    evaluate_scene,
+    evaluation_classes,
+    load_scene,
+    map_scenes,
+    read_scene_detections,
+    scene_group,
+    summarize_outcomes,
+)
 from ._match import (
     DISTANCE_THRESHOLDS,
     Instance,
@@ -24,21 +60,52 @@ from ._metrics import (
     evaluate_scenes,
     precision_recall_curve,
 )
+from ._report import ReportFiles, literature_comparisons, markdown_report, write_report
 
 __all__ = [
+    "CRITERIA",
+    "DATASET_FORMATS",
     "DISTANCE_THRESHOLDS",
     "NYU40_CLASSES",
+    "CalibrationResult",
     "ClassMetrics",
+    "ConstraintFit",
+    "DatasetEvaluation",
     "Evaluation",
     "Instance",
+    "LoadedScene",
     "MatchResult",
+    "ReportFiles",
+    "SceneError",
+    "SceneOutcome",
     "SceneResult",
+    "SceneSamples",
+    "SceneSource",
+    "SceneSplit",
     "average_precision",
+    "calibrate_dataset",
+    "calibrate_ontology",
+    "collect_scene_samples",
+    "constraint_values",
+    "discover_scenes",
+    "evaluate_dataset",
+    "evaluate_scene",
     "evaluate_scenes",
+    "evaluation_classes",
+    "fit_gaussian",
     "instances_from_labels",
+    "literature_comparisons",
+    "load_scene",
+    "map_scenes",
+    "markdown_report",
     "match_instances",
     "overlap_matrix",
     "precision_recall_curve",
+    "read_scene_detections",
+    "scene_group",
+    "split_scenes",
+    "summarize_outcomes",
+    "write_report",
 ]
 
 #: NYU40 class id -> evaluated class (desks count as tables).

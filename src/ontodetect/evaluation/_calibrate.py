@@ -12,7 +12,9 @@ maximum likelihood with a floor on σ:
   a range is written back as [μ − σ, μ + σ];
 - one-sided ``{min: a}`` / ``{max: b}`` stay one-sided: the bound moves to the
   :data:`ONE_SIDED_QUANTILE` (or 1 − it) quantile of the values, so that most objects
-  score 1, and ``soft`` (if the file has it) becomes the floored sample std.
+  score 1, and ``soft`` (if the file has it) becomes the floored sample std;
+- plateaus ``{min: a, max: b, soft: s}`` stay plateaus: both bounds move to those
+  quantiles, ``soft`` becomes the floored sample std.
 
 Constraints with fewer than :data:`MIN_SAMPLES` values keep their prior. The YAML
 keeps its structure (same classes, parts, relations and keys; only numbers change);
@@ -87,12 +89,14 @@ ABS_SIGMA_FLOOR: dict[str, float] = {
     "area": 0.01,
     "fill": 0.03,
     "overlap": 0.03,
+    "rise": 0.02,
     "planes": 0.5,
 }
 #: A one-sided bound moves to this quantile of the values (``min``; 1 - it for ``max``).
 ONE_SIDED_QUANTILE = 0.05
-#: Significant digits of the numbers written to the calibrated file.
+#: Significant digits of the numbers written to the calibrated file (more when needed).
 DIGITS = 4
+MAX_DIGITS = 15
 
 #: A constraint's place in the YAML: (class, "parts", part, feature),
 #: (class, "relations", index, feature) or (class, "cluster", feature).
@@ -174,8 +178,10 @@ def split_scenes(scenes: Sequence[Any], fraction: float = 0.5, seed: int = 0) ->
     >>> sorted(s.groups("calibration") + s.groups("held_out"))
     ['scene0000', 'scene0002', 'scene0003']
     """
-    if isinstance(fraction, bool) or not isinstance(fraction, (int, float)) or not (
-        0.0 < fraction <= 1.0
+    if (
+        isinstance(fraction, bool)
+        or not isinstance(fraction, (int, float))
+        or not (0.0 < fraction <= 1.0)
     ):
         raise InvalidParameterError("split", "a share of the rooms in (0, 1]", fraction)
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
@@ -189,8 +195,11 @@ def split_scenes(scenes: Sequence[Any], fraction: float = 0.5, seed: int = 0) ->
             "split", "1 (no held-out scenes) for a dataset of a single room", fraction
         )
     order = np.random.default_rng(int(seed)).permutation(len(groups))
-    k = len(groups) if fraction >= 1.0 else int(np.clip(round(fraction * len(groups)), 1,
-                                                         len(groups) - 1))
+    k = (
+        len(groups)
+        if fraction >= 1.0
+        else int(np.clip(round(fraction * len(groups)), 1, len(groups) - 1))
+    )
     chosen = {groups[i] for i in order[:k]}
     return SceneSplit(
         [s for s in items if _group_of(s) in chosen],
@@ -230,8 +239,11 @@ def constraint_values(cls: Any, score: Any) -> dict[ConstraintPath, float]:
             path = (cls.name, "parts", cv.part, cv.feature)
         else:
             for i, rel in enumerate(cls.relations):
-                if (f"{rel.a}~{rel.b}" == cv.part and cv.feature in rel.constraints
-                        and (i, cv.feature) not in used):
+                if (
+                    f"{rel.a}~{rel.b}" == cv.part
+                    and cv.feature in rel.constraints
+                    and (i, cv.feature) not in used
+                ):
                     used.add((i, cv.feature))
                     path = (cls.name, "relations", i, cv.feature)
                     break
@@ -297,8 +309,13 @@ def collect_scene_samples(
         gts = instances_from_labels(cloud.fields["instance"], cloud.fields["class_id"], ids)
         if not gts:
             return SceneSamples(source.name)
-        seg = segment(cloud, opts.get("config"), seed=opts.get("seed", 0), up=opts.get("up"),
-                      scale=opts.get("scale"))
+        seg = segment(
+            cloud,
+            opts.get("config"),
+            seed=opts.get("seed", 0),
+            up=opts.get("up"),
+            scale=opts.get("scale"),
+        )
     except OntoDetectError as exc:
         return SceneSamples(source.name, error=str(exc))
     clusters = [Instance.make(k, "cluster", c.point_indices) for k, c in enumerate(seg)]
@@ -355,12 +372,23 @@ def fit_gaussian(prior: Any, values: Sequence[float], feature: str) -> Any:
     x = x[np.isfinite(x)]
     if len(x) < MIN_SAMPLES:
         return prior
-    sigma = max(float(x.std()), sigma_floor(prior, feature))
+    floor = sigma_floor(prior, feature)
+    sigma = max(float(x.std()), floor)
+    low = float(np.quantile(x, ONE_SIDED_QUANTILE))
+    high = float(np.quantile(x, 1.0 - ONE_SIDED_QUANTILE))
     if prior.side == "min":
-        return Gaussian(float(np.quantile(x, ONE_SIDED_QUANTILE)), sigma, "min")
+        return Gaussian(low, sigma, "min")
     if prior.side == "max":
-        return Gaussian(float(np.quantile(x, 1.0 - ONE_SIDED_QUANTILE)), sigma, "max")
-    return Gaussian(float(x.mean()), sigma)
+        return Gaussian(high, sigma, "max")
+    if prior.side == "plateau":
+        if high - low < floor:
+            # Values (nearly) all alike: a plateau as wide as the σ floor around them.
+            mid = (low + high) / 2
+            low, high = mid - floor / 2, mid + floor / 2
+        return Gaussian.plateau(low, high, sigma)
+    if prior.side == "both":
+        return Gaussian(float(x.mean()), sigma)
+    return prior  # a form this version does not know how to fit
 
 
 @dataclass(frozen=True)
@@ -386,10 +414,17 @@ class ConstraintFit:
 
     def to_dict(self) -> dict[str, Any]:
         def g(x: Any) -> dict[str, Any]:
-            return {"mean": x.mean, "sigma": x.sigma, "side": x.side}
+            out = {"mean": x.mean, "sigma": x.sigma, "side": x.side}
+            if getattr(x, "upper", None) is not None:
+                out["upper"] = x.upper
+            return out
 
-        return {"constraint": self.name, "samples": self.samples, "before": g(self.before),
-                "after": g(self.after)}
+        return {
+            "constraint": self.name,
+            "samples": self.samples,
+            "before": g(self.before),
+            "after": g(self.after),
+        }
 
 
 def _round(v: float, digits: int = DIGITS) -> float:
@@ -397,30 +432,41 @@ def _round(v: float, digits: int = DIGITS) -> float:
     return 0.0 if r == 0 else r
 
 
+def _spec_with(spec: Any, g: Any, digits: int) -> Any | None:
+    """``spec`` in its own form with ``g``'s numbers; None if rounding collapses it."""
+    if isinstance(spec, list) or (isinstance(spec, dict) and "range" in spec):
+        lo, hi = _round(g.mean - g.sigma, digits), _round(g.mean + g.sigma, digits)
+        if hi <= lo:
+            return None
+        return [lo, hi] if isinstance(spec, list) else {**spec, "range": [lo, hi]}
+    if not isinstance(spec, dict):
+        return spec
+    if "mean" in spec:
+        sigma = _round(g.sigma, digits)
+        return {**spec, "mean": _round(g.mean, digits), "sigma": sigma} if sigma > 0 else None
+    out = dict(spec)
+    if "min" in spec and "max" in spec:
+        out["min"], out["max"] = _round(g.mean, digits), _round(g.upper, digits)
+        if out["max"] <= out["min"]:
+            return None
+    elif "min" in spec or "max" in spec:
+        out["min" if "min" in spec else "max"] = _round(g.mean, digits)
+    else:
+        return spec
+    if "soft" in spec:
+        out["soft"] = _round(g.sigma, digits)
+        if out["soft"] <= 0:
+            return None
+    return out
+
+
 def _write_spec(spec: Any, g: Any) -> Any:
     """The YAML value of a constraint in its original form, with ``g``'s numbers."""
-    # More digits when rounding would collapse a narrow range onto one number.
-    for digits in range(DIGITS, 16):
-        if isinstance(spec, list) or (isinstance(spec, dict) and "range" in spec):
-            lo, hi = _round(g.mean - g.sigma, digits), _round(g.mean + g.sigma, digits)
-            if hi <= lo:
-                continue
-            return [lo, hi] if isinstance(spec, list) else {**spec, "range": [lo, hi]}
-        if isinstance(spec, dict) and "mean" in spec:
-            s = _round(g.sigma, digits)
-            if s <= 0:
-                continue
-            return {**spec, "mean": _round(g.mean, digits), "sigma": s}
-        for side in ("min", "max"):
-            if isinstance(spec, dict) and side in spec:
-                out = {**spec, side: _round(g.mean, digits)}
-                if "soft" in spec:
-                    out["soft"] = _round(g.sigma, digits)
-                    if out["soft"] <= 0:
-                        break
-                return out
-        else:
-            return spec
+    # More digits when rounding would collapse a narrow range or a small sigma to nothing.
+    for digits in range(DIGITS, MAX_DIGITS + 1):
+        out = _spec_with(spec, g, digits)
+        if out is not None:
+            return out
     return spec
 
 
@@ -439,8 +485,14 @@ class _Dumper(yaml.SafeDumper):
 
 
 def _represent_dict(dumper: yaml.SafeDumper, data: dict[str, Any]) -> yaml.Node:
-    flow = all(not isinstance(v, dict) and not (isinstance(v, list) and any(
-        isinstance(x, (dict, list)) for x in v)) for v in data.values()) and len(data) <= 4
+    flow = (
+        all(
+            not isinstance(v, dict)
+            and not (isinstance(v, list) and any(isinstance(x, (dict, list)) for x in v))
+            for v in data.values()
+        )
+        and len(data) <= 4
+    )
     return dumper.represent_mapping("tag:yaml.org,2002:map", data, flow_style=flow)
 
 
@@ -557,10 +609,18 @@ class CalibrationResult:
         for c in [*b.classes, "overall"]:
             mb = b.overall if c == "overall" else b.per_class[c]
             ma = a.overall if c == "overall" else a.per_class[c]
-            rows.append({"class": c, "ground_truth": mb.num_gt,
-                         "precision_before": mb.precision, "recall_before": mb.recall,
-                         "precision_after": ma.precision, "recall_after": ma.recall,
-                         "detections_before": mb.num_pred, "detections_after": ma.num_pred})
+            rows.append(
+                {
+                    "class": c,
+                    "ground_truth": mb.num_gt,
+                    "precision_before": mb.precision,
+                    "recall_before": mb.recall,
+                    "precision_after": ma.precision,
+                    "recall_after": ma.recall,
+                    "detections_before": mb.num_pred,
+                    "detections_after": ma.num_pred,
+                }
+            )
         return rows
 
     def to_dict(self) -> dict[str, Any]:
@@ -638,8 +698,7 @@ def calibrate_dataset(
 
     opts = _check_detect_options(detect_options)
     if "ontology" in opts:
-        raise InvalidParameterError("detect_options", "without 'ontology' (use base=)",
-                                    "ontology")
+        raise InvalidParameterError("detect_options", "without 'ontology' (use base=)", "ontology")
     if not 0.0 < min_iou <= 1.0:
         raise InvalidParameterError("min_iou", "a number in (0, 1]", min_iou)
     text = _builtin_text() if base is None else _read_text(base)
@@ -649,8 +708,9 @@ def calibrate_dataset(
     parts = split_scenes(units, split, seed)
 
     seg_opts = {k: opts[k] for k in ("config", "seed", "up", "scale") if k in opts}
-    work = functools.partial(collect_scene_samples, ontology=base_onto,
-                             segment_options=seg_opts, min_iou=min_iou)
+    work = functools.partial(
+        collect_scene_samples, ontology=base_onto, segment_options=seg_opts, min_iou=min_iou
+    )
     samples = map_scenes(work, parts.calibration, jobs=jobs, description="Measuring objects")
     values: dict[ConstraintPath, list[float]] = {}
     used: dict[str, int] = {}
@@ -676,9 +736,20 @@ def calibrate_dataset(
     new_onto = parse_ontology(new_text, source)
     before = after = None
     if evaluate and parts.held_out:
-        before = evaluate_dataset(path, jobs=jobs, detect_options={**opts, "ontology": base_onto},
-                                  scenes=parts.held_out, on_error="skip")
-        after = evaluate_dataset(path, jobs=jobs, detect_options={**opts, "ontology": new_onto},
-                                 scenes=parts.held_out, on_error="skip")
-    return CalibrationResult(new_text, new_onto, base_onto, parts, fits, used, skipped, before,
-                             after, failed)
+        before = evaluate_dataset(
+            path,
+            jobs=jobs,
+            detect_options={**opts, "ontology": base_onto},
+            scenes=parts.held_out,
+            on_error="skip",
+        )
+        after = evaluate_dataset(
+            path,
+            jobs=jobs,
+            detect_options={**opts, "ontology": new_onto},
+            scenes=parts.held_out,
+            on_error="skip",
+        )
+    return CalibrationResult(
+        new_text, new_onto, base_onto, parts, fits, used, skipped, before, after, failed
+    )

@@ -85,9 +85,18 @@ _VOTENET_SUFFIX = "_vert.npy"
 _SCANNET_MESH = "_vh_clean_2.ply"
 _SCAN_ID = re.compile(r"(scene\d{4})_\d{2}")
 _DETECT_KEYS = (
-    "config", "ontology", "room", "indoor", "threshold", "beta", "none_likelihood",
-    "context", "seed", "up", "scale",
-)  # fmt: skip
+    "config",
+    "ontology",
+    "room",
+    "indoor",
+    "threshold",
+    "beta",
+    "none_likelihood",
+    "context",
+    "seed",
+    "up",
+    "scale",
+)
 
 
 class SceneError(OntoDetectError):
@@ -331,9 +340,12 @@ def load_scene(source: SceneSource, class_ids: Mapping[int, str] | None = None) 
     cloud = read_scene_cloud(source)
     class_ids = evaluation_classes() if class_ids is None else class_ids
     gts = instances_from_labels(
-        cloud.fields["instance"], cloud.fields["class_id"], class_ids,
-        xyz=cloud.xyz, index=cloud.index,
-    )  # fmt: skip
+        cloud.fields["instance"],
+        cloud.fields["class_id"],
+        class_ids,
+        xyz=cloud.xyz,
+        index=cloud.index,
+    )
     return LoadedScene(source, cloud, gts)
 
 
@@ -358,10 +370,11 @@ def read_scene_detections(
             "these detections belong to another scan",
         )
     return [
-        Instance.make(d["id"], d["label"], d["point_indices"], float(d["score"]),
-                      d["box"]["center"])
+        Instance.make(
+            d["id"], d["label"], d["point_indices"], float(d["score"]), d["box"]["center"]
+        )
         for d in doc["detections"]
-    ]  # fmt: skip
+    ]
 
 
 # -- one scene -----------------------------------------------------------------------------
@@ -402,8 +415,13 @@ class SceneOutcome:
         return self.error is None
 
     def scene_result(self) -> SceneResult:
-        return SceneResult(self.name, self.preds, self.gts, self.seconds,
-                           {"points": self.num_points, "load_seconds": self.load_seconds})
+        return SceneResult(
+            self.name,
+            self.preds,
+            self.gts,
+            self.seconds,
+            {"points": self.num_points, "load_seconds": self.load_seconds},
+        )
 
     def to_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {
@@ -476,14 +494,24 @@ def evaluate_scene(
             result = detect(scene.cloud, **opts)
             seconds = time.perf_counter() - t1
             timings = dict(result.timings)
-            preds = [Instance.make(d.id, d.label, d.point_indices, d.score, d.center)
-                     for d in result.detections]
+            preds = [
+                Instance.make(d.id, d.label, d.point_indices, d.score, d.center)
+                for d in result.detections
+            ]
             if save_dir is not None:
                 _save_detections(result, Path(save_dir) / source.name)
     except OntoDetectError as exc:
         return SceneOutcome(source.name, source, error=str(exc))
-    return SceneOutcome(source.name, source, tuple(preds), tuple(scene.gts), scene.num_points,
-                        seconds, load, timings)
+    return SceneOutcome(
+        source.name,
+        source,
+        tuple(preds),
+        tuple(scene.gts),
+        scene.num_points,
+        seconds,
+        load,
+        timings,
+    )
 
 
 def _save_detections(result: Any, folder: Path) -> None:
@@ -585,8 +613,12 @@ class DatasetEvaluation:
         t = np.array([s.seconds for s in self.scenes], dtype=np.float64)
         if not len(t):
             return {"mean": 0.0, "median": 0.0, "max": 0.0, "total": 0.0}
-        return {"mean": float(t.mean()), "median": float(np.median(t)),
-                "max": float(t.max()), "total": float(t.sum())}
+        return {
+            "mean": float(t.mean()),
+            "median": float(np.median(t)),
+            "max": float(t.max()),
+            "total": float(t.sum()),
+        }
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -619,8 +651,16 @@ def summarize_outcomes(
         key: evaluate_scenes(results, classes, criterion=crit, iou_threshold=thr)
         for key, (crit, thr) in CRITERIA.items()
     }
-    return DatasetEvaluation(str(dataset), list(classes), evaluations, ok,
-                             [o for o in outcomes if not o.ok], dict(options or {}), jobs, seconds)
+    return DatasetEvaluation(
+        str(dataset),
+        list(classes),
+        evaluations,
+        ok,
+        [o for o in outcomes if not o.ok],
+        dict(options or {}),
+        jobs,
+        seconds,
+    )
 
 
 def _jsonable_option(value: Any) -> Any:
@@ -647,9 +687,11 @@ def describe_options(
             default = Config().to_dict()
             changed = {
                 f"{sec}.{k}": _jsonable_option(v)
-                for sec, vals in value.to_dict().items() if isinstance(vals, dict)
-                for k, v in vals.items() if default.get(sec, {}).get(k) != v
-            }  # fmt: skip
+                for sec, vals in value.to_dict().items()
+                if isinstance(vals, dict)
+                for k, v in vals.items()
+                if default.get(sec, {}).get(k) != v
+            }
             out["config"] = changed or "defaults"
         elif key == "ontology":
             out["ontology"] = {"source": value.source, "classes": value.names}
@@ -712,15 +754,22 @@ def evaluate_dataset(
     class_ids = evaluation_classes(ontology)
     classes = list(dict.fromkeys(class_ids.values()))
     work = functools.partial(
-        evaluate_scene, detect_options=opts, detections_dir=detections_dir,
-        save_dir=save_detections, class_ids=class_ids,
-    )  # fmt: skip
+        evaluate_scene,
+        detect_options=opts,
+        detections_dir=detections_dir,
+        save_dir=save_detections,
+        class_ids=class_ids,
+    )
     outcomes = map_scenes(work, units, jobs=jobs, description="Evaluating scenes")
     if on_error == "raise":
         for o in outcomes:
             if not o.ok:
                 raise SceneError(o.name, o.error or "failed")
     return summarize_outcomes(
-        outcomes, classes, dataset=str(path), options=describe_options(opts, detections_dir),
-        jobs=_check_jobs(jobs), seconds=time.perf_counter() - start,
-    )  # fmt: skip
+        outcomes,
+        classes,
+        dataset=str(path),
+        options=describe_options(opts, detections_dir),
+        jobs=_check_jobs(jobs),
+        seconds=time.perf_counter() - start,
+    )

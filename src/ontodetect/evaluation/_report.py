@@ -104,13 +104,33 @@ def _table(header: list[str], rows: list[list[str]], align: str | None = None) -
 
 def _metric_row(m: ClassMetrics, bold: bool = False) -> list[str]:
     name = f"**{m.label}**" if bold else m.label
-    return [name, str(m.num_gt), str(m.num_pred), str(m.tp), str(m.fp), str(m.fn),
-            _pct(m.precision), _pct(m.recall), _pct(m.f1), _pct(m.ap)]
+    return [
+        name,
+        str(m.num_gt),
+        str(m.num_pred),
+        str(m.tp),
+        str(m.fp),
+        str(m.fn),
+        _pct(m.precision),
+        _pct(m.recall),
+        _pct(m.f1),
+        _pct(m.ap),
+    ]
 
 
 def _class_table(ev: Evaluation) -> list[str]:
-    header = ["class", "ground truth", "detections", "TP", "FP", "FN",
-              "precision %", "recall %", "F1 %", "AP %"]
+    header = [
+        "class",
+        "ground truth",
+        "detections",
+        "TP",
+        "FP",
+        "FN",
+        "precision %",
+        "recall %",
+        "F1 %",
+        "AP %",
+    ]
     rows = [_metric_row(ev.per_class[c]) for c in ev.classes]
     rows.append(_metric_row(ev.overall, bold=True))
     return _table(header, rows)
@@ -134,8 +154,10 @@ def _criteria_table(evaluation: DatasetEvaluation) -> list[str]:
 def _confusion_table(ev: Evaluation) -> list[str]:
     cols = [*ev.classes, "missed"]
     header = ["ground truth ↓ / detected →", *cols]
-    rows = [[label, *(str(int(v)) for v in ev.confusion[i])]
-            for i, label in enumerate(ev.confusion_labels)]
+    rows = [
+        [label, *(str(int(v)) for v in ev.confusion[i])]
+        for i, label in enumerate(ev.confusion_labels)
+    ]
     return _table(header, rows)
 
 
@@ -187,18 +209,28 @@ def _literature_section(evaluation: DatasetEvaluation) -> list[str]:
     rows = []
     for comp in literature_comparisons():
         for r in comp.get("results", []):
-            rows.append([
-                f"{comp['dataset']} ({comp.get('description', '')})",
-                str(r["method"]), _pct(r["precision"]), _pct(r["recall"]),
-                str(comp.get("source", "")),
-            ])  # fmt: skip
+            rows.append(
+                [
+                    f"{comp['dataset']} ({comp.get('description', '')})",
+                    str(r["method"]),
+                    _pct(r["precision"]),
+                    _pct(r["recall"]),
+                    str(comp.get("source", "")),
+                ]
+            )
     name = Path(evaluation.dataset).name or evaluation.dataset
     for key in ("iou@0.25", "distance"):
         if key in evaluation.evaluations:
             m = evaluation.evaluations[key].overall
-            rows.append([f"**this run**: {name} ({len(evaluation.scenes)} scenes)",
-                         f"ontodetect, {CRITERION_NAMES[key]}", _pct(m.precision),
-                         _pct(m.recall), "this report"])
+            rows.append(
+                [
+                    f"**this run**: {name} ({len(evaluation.scenes)} scenes)",
+                    f"ontodetect, {CRITERION_NAMES[key]}",
+                    _pct(m.precision),
+                    _pct(m.recall),
+                    "this report",
+                ]
+            )
     lines += _table(["dataset", "method", "precision %", "recall %", "source"], rows, "llrrl")
     return lines
 
@@ -256,9 +288,12 @@ def markdown_report(evaluation: DatasetEvaluation) -> str:
         "",
     ]
     if evaluation.failed:
-        lines += ["## Failed scenes", "",
-                  *_table(["scene", "error"], [[s.name, s.error or ""] for s in evaluation.failed],
-                          "ll"), ""]  # fmt: skip
+        lines += [
+            "## Failed scenes",
+            "",
+            *_table(["scene", "error"], [[s.name, s.error or ""] for s in evaluation.failed], "ll"),
+            "",
+        ]
     lines += [*_literature_section(evaluation), ""]
     return "\n".join(lines)
 
@@ -278,11 +313,15 @@ def report_document(evaluation: DatasetEvaluation) -> dict[str, Any]:
     """The ``report.json`` document: :meth:`DatasetEvaluation.to_dict`, curves, literature."""
     doc = evaluation.to_dict()
     doc["curves"] = {
-        key: {c: {"precision": np.round(p, CURVE_DECIMALS).tolist(),
-                  "recall": np.round(r, CURVE_DECIMALS).tolist()}
-              for c, (p, r) in ev.curves.items()}
+        key: {
+            c: {
+                "precision": np.round(p, CURVE_DECIMALS).tolist(),
+                "recall": np.round(r, CURVE_DECIMALS).tolist(),
+            }
+            for c, (p, r) in ev.curves.items()
+        }
         for key, ev in evaluation.evaluations.items()
-    }  # fmt: skip
+    }
     doc["literature"] = {
         "note": "measured on other datasets by the thesis and the works it cites",
         "comparisons": literature_comparisons(),
@@ -350,8 +389,14 @@ def confusion_png(ev: Evaluation) -> bytes:
     ax.set_title(f"Confusion at {CRITERION_NAMES.get(PRIMARY, PRIMARY)}", fontsize=10)
     half = mat.max() / 2 if mat.size else 0
     for (i, j), v in np.ndenumerate(mat):
-        ax.text(j, i, f"{int(v)}", ha="center", va="center",
-                color="white" if v > half and v > 0 else "black")
+        ax.text(
+            j,
+            i,
+            f"{int(v)}",
+            ha="center",
+            va="center",
+            color="white" if v > half and v > 0 else "black",
+        )
     fig.tight_layout()
     return _png(fig)
 
@@ -382,9 +427,9 @@ def write_report(evaluation: DatasetEvaluation, out_dir: str | os.PathLike[str])
             raise WriteError(out, f"the evaluation lacks the {key!r} criterion")
     md = atomic_write_text(out / "report.md", markdown_report(evaluation))
     js = atomic_write_text(
-        out / "report.json", json.dumps(report_document(evaluation), indent=1, ensure_ascii=False)
-        + "\n",
-    )  # fmt: skip
+        out / "report.json",
+        json.dumps(report_document(evaluation), indent=1, ensure_ascii=False) + "\n",
+    )
     pr = atomic_write_bytes(out / "pr_curves.png", pr_curves_png(evaluation))
     cm = atomic_write_bytes(out / "confusion.png", confusion_png(evaluation.primary))
     return ReportFiles(md, js, pr, cm)
