@@ -137,16 +137,13 @@ def _class_table(ev: Evaluation) -> list[str]:
 
 
 def _criteria_table(evaluation: DatasetEvaluation) -> list[str]:
-    header = ["class"]
-    for key in evaluation.evaluations:
-        name = CRITERION_NAMES.get(key, key)
-        header += [f"P % ({name})", f"R % ({name})"]
+    header = ["class", *(f"{CRITERION_NAMES.get(k, k)}: P / R %" for k in evaluation.evaluations)]
     rows = []
     for c in [*evaluation.classes, "overall"]:
         row = [f"**{c}**" if c == "overall" else c]
         for ev in evaluation.evaluations.values():
             m = ev.overall if c == "overall" else ev.per_class[c]
-            row += [_pct(m.precision), _pct(m.recall)]
+            row.append(f"{_pct(m.precision)} / {_pct(m.recall)}")
         rows.append(row)
     return _table(header, rows)
 
@@ -158,6 +155,7 @@ def _confusion_table(ev: Evaluation) -> list[str]:
         [label, *(str(int(v)) for v in ev.confusion[i])]
         for i, label in enumerate(ev.confusion_labels)
     ]
+    rows[-1][-1] = ""  # a false alarm cannot be missed
     return _table(header, rows)
 
 
@@ -208,14 +206,15 @@ def _literature_section(evaluation: DatasetEvaluation) -> list[str]:
     ]
     rows = []
     for comp in literature_comparisons():
-        for r in comp.get("results", []):
+        where = f"{comp['dataset']}: {comp.get('description', '')}"
+        for k, r in enumerate(comp.get("results", [])):
             rows.append(
                 [
-                    f"{comp['dataset']} ({comp.get('description', '')})",
+                    where if k == 0 else "",
                     str(r["method"]),
                     _pct(r["precision"]),
                     _pct(r["recall"]),
-                    str(comp.get("source", "")),
+                    str(comp.get("source", "")) if k == 0 else "",
                 ]
             )
     name = Path(evaluation.dataset).name or evaluation.dataset
@@ -389,6 +388,8 @@ def confusion_png(ev: Evaluation) -> bytes:
     ax.set_title(f"Confusion at {CRITERION_NAMES.get(PRIMARY, PRIMARY)}", fontsize=10)
     half = mat.max() / 2 if mat.size else 0
     for (i, j), v in np.ndenumerate(mat):
+        if i == len(ev.confusion_labels) - 1 and j == len(cols) - 1:
+            continue  # a false alarm cannot be missed: the corner is empty by definition
         ax.text(
             j,
             i,
