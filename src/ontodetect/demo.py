@@ -13,6 +13,7 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
+from .errors import InvalidParameterError
 from .evaluation import (
     Evaluation,
     Instance,
@@ -20,6 +21,7 @@ from .evaluation import (
     evaluate_scenes,
     instances_from_labels,
 )
+from .ontology import room_distribution
 from .outputs import OutputFiles, write_outputs
 from .pipeline import Result, detect
 from .synth import synthesize, write_synth
@@ -53,7 +55,12 @@ def run_demo(out_dir: str | os.PathLike[str], *, room: str = DEMO_ROOM,
     synth = synthesize(room, sensor, seed)
     scan_dir = write_synth(synth, out / "scan")
     cloud = synth.cloud.with_meta(source=str(scan_dir / "cloud.ply"))
-    result = detect(cloud, room=room, seed=seed)
+    # The simulator's room types double as environment categories where Places205 has them.
+    try:
+        prior_room: str | None = room if room_distribution(room) else None
+    except InvalidParameterError:
+        prior_room = None
+    result = detect(cloud, room=prior_room, seed=seed)
     files = write_outputs(result, out, title=f"simulated {room} (seed {seed}): "
                                               f"{len(result.detections)} objects")
     gts = instances_from_labels(cloud.fields["instance"], cloud.fields["class_id"], _EVALUATED,

@@ -98,8 +98,10 @@ class SynthResult:
 
     @property
     def cloud(self) -> PointCloud:
-        """The points as the sensor returns them (see ``output.frame``)."""
-        return self.output.cloud
+        """The points as the sensor returns them (see ``output.frame``), in the order
+        ``cloud.ply`` stores them: ``index`` is the row in that file."""
+        cloud = self.output.cloud
+        return cloud if cloud.is_complete else cloud.replace(index=None)
 
     def objects_by_class(self, *, seen_only: bool = False) -> dict[str, int]:
         """Number of furniture objects (not floor, walls...) per class, sorted by class name."""

@@ -1,0 +1,90 @@
+"""End to end: simulate a scene, run ``ontodetect detect`` in-process, check every output."""
+
+import json
+
+import numpy as np
+import pytest
+
+from ontodetect.cli import main
+from ontodetect.io import read_cloud
+from ontodetect.synth import synthesize, write_synth
+
+
+@pytest.fixture(scope="module")
+def scene(tmp_path_factory):
+    out = tmp_path_factory.mktemp("scene")
+    write_synth(synthesize("dining_room", "rgbd", seed=5, points=60_000), out)
+    return out
+
+
+def test_detect_writes_the_contract(scene, tmp_path, capsys):
+    out = tmp_path / "result"
+    assert main(["detect", str(scene / "cloud.ply"), "-o", str(out), "--room", "dining_room"]) == 0
+    doc = json.loads((out / "detections.json").read_text())
+    cloud = read_cloud(scene / "cloud.ply")
+    assert doc["format"] == "ontodetect.detections/1"
+    assert doc["source"].endswith("cloud.ply")
+    assert doc["num_points"] == len(cloud)
+    assert doc["frame"]["up"] == pytest.approx([0, 0, 1], abs=1e-6)
+    assert doc["detections"], "a dining room has chairs and a table"
+    ids = [d["id"] for d in doc["detections"]]
+    assert ids == list(range(1, len(ids) + 1))
+    scores = [d["score"] for d in doc["detections"]]
+    assert scores == sorted(scores, reverse=True)
+    claimed = np.zeros(len(cloud), dtype=int)
+    truth = cloud.fields["class_id"]
+    for d in doc["detections"]:
+        assert d["label"] in {"chair", "sofa", "table"}
+        assert set(d["probabilities"]) >= {"chair", "sofa", "table"}
+        assert d["score"] == pytest.approx(d["probabilities"][d["label"]], abs=1e-3)
+        assert min(d["costs"], key=d["costs"].get) == d["label"] or d["costs"][d["label"]] <= 1
+        box = d["box"]
+        assert len(box["center"]) == 3 and len(box["size"]) == 3 and isinstance(box["yaw"], float)
+        pts = np.asarray(d["point_indices"])
+        assert pts.size and pts.min() >= 0 and pts.max() < len(cloud)
+        claimed[pts] += 1
+        # the box holds its points (upright box, yaw about z)
+        c, s = np.cos(box["yaw"]), np.sin(box["yaw"])
+        rel = cloud.xyz[pts] - box["center"]
+        local = np.c_[c * rel[:, 0] + s * rel[:, 1], -s * rel[:, 0] + c * rel[:, 1], rel[:, 2]]
+        assert np.all(np.abs(local) <= np.asarray(box["size"]) / 2 + 0.05)
+        for part in d["parts"]:
+            assert {"name", "normal", "centroid", "extent", "height", "num_points"} <= set(part)
+    assert claimed.max() <= 1, "two detections never claim the same point"
+    chairs = [d for d in doc["detections"] if d["label"] == "chair"]
+    assert chairs, "at least one chair found"
+    best = max(chairs, key=lambda d: d["score"])
+    assert np.mean(truth[best["point_indices"]] == 5) > 0.5
+    labelled = read_cloud(out / "labelled.ply")
+    assert len(labelled) == len(cloud)
+    assert set(np.unique(labelled.fields["instance"])) <= {0, *ids}
+    assert (out / "detections.png").read_bytes()[:4] == b"\x89PNG"
+    printed = capsys.readouterr().out
+    assert "chair" in printed
+
+
+def test_detect_explain_prints_constraints(scene, tmp_path, capsys):
+    code = main(["detect", str(scene / "cloud.ply"), "-o", str(tmp_path), "--explain",
+                 "--no-picture"])
+    assert code == 0
+    text = capsys.readouterr().out
+    assert "P_obj|ont" in text and "cost U" in text and "seat" in text
+    assert not (tmp_path / "detections.png").exists()
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--room", "spaceship"], "'room'"),
+    (["--set", "cluster.radius=-1"], "cluster.radius"),
+    (["--threshold", "2"], "'threshold'"),
+])
+def test_detect_bad_parameters_exit_2_with_one_line(scene, tmp_path, capsys, args, message):
+    code = main(["detect", str(scene / "cloud.ply"), "-o", str(tmp_path / "o"), *args])
+    assert code == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and err.startswith("error:")
+    assert "Traceback" not in err
+
+
+def test_detect_missing_input(tmp_path, capsys):
+    assert main(["detect", str(tmp_path / "nope.ply"), "-o", str(tmp_path / "o")]) == 2
+    assert "nope.ply: no such file" in capsys.readouterr().err
