@@ -46,6 +46,7 @@ __all__ = [
     "ClusterConfig",
     "Config",
     "ConfigValueError",
+    "DetectConfig",
     "PlaneConfig",
     "PrepareConfig",
     "UnknownKeyError",
@@ -430,6 +431,22 @@ class PlaneConfig(_Section):
     )
 
 
+@dataclass(frozen=True)
+class DetectConfig(_Section):
+    """Scoring and labelling (§3.4–3.6, Algorithm 1 steps 10–18, Eq. 3.6–3.8)."""
+
+    SECTION: ClassVar[str] = "detect"
+
+    # Table 4.1: threshold for probabilistic decision 15 %.
+    threshold: float = _param(0.15, FRACTION, "Decision threshold on P_obj|ont.")
+    # Eq. 3.7: beta + gamma = 1; the thesis gives no value, equal weights by default.
+    beta: float = _param(0.5, FRACTION, "Energy weight of the class probability; gamma = 1 - beta.")
+    none_likelihood: float = _param(
+        0.05, Interval(0.0, 1.0, "right"),
+        "Likelihood of a cluster under 'none of the classes'.")
+    context: float = _param(0.0, NON_NEGATIVE, "Strength of the seat-near-table pairwise term.")
+
+
 # -- the whole configuration ---------------------------------------------------------------
 @dataclass(frozen=True)
 class Config:
@@ -453,6 +470,7 @@ class Config:
     prepare: PrepareConfig = field(default_factory=PrepareConfig)
     cluster: ClusterConfig = field(default_factory=ClusterConfig)
     planes: PlaneConfig = field(default_factory=PlaneConfig)
+    detect: DetectConfig = field(default_factory=DetectConfig)
 
     def __post_init__(self) -> None:
         for name, cls in self.section_classes().items():

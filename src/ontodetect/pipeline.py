@@ -220,10 +220,10 @@ def detect(
     ontology: Ontology | None = None,
     room: str | Mapping[str, float] | None = None,
     indoor: float | None = None,
-    threshold: float = 0.15,
-    beta: float = 0.5,
-    none_likelihood: float = 0.05,
-    context: float = 0.0,
+    threshold: float | None = None,
+    beta: float | None = None,
+    none_likelihood: float | None = None,
+    context: float | None = None,
     seed: int = 0,
     up: str | Sequence[float] | None = None,
     scale: float | None = None,
@@ -242,14 +242,10 @@ def detect(
         Room category or distribution for the environment prior (Eq. 3.10).
     indoor : float, optional
         P(indoor) for the indoor/outdoor prior (Eq. 3.5).
-    threshold : float
-        Decision threshold on P_obj|ont (Table 4.1: 15 %).
-    beta : float
-        Weight of the class probability in the energy (γ = 1 − β).
-    none_likelihood : float
-        Likelihood of a cluster under "none of the classes".
-    context : float
-        Strength of the seat-near-table pairwise term (0: off).
+    threshold, beta, none_likelihood, context : float, optional
+        Override ``config.detect``: decision threshold on P_obj|ont (Table 4.1:
+        15 %), weight β of the class probability in the energy (γ = 1 − β),
+        likelihood of "none of the classes", strength of the seat-near-table term.
     seed : int
         Seed of every random step.
     up, scale :
@@ -268,6 +264,12 @@ def detect(
     """
     if not isinstance(cloud, PointCloud):
         raise InvalidParameterError("cloud", "a PointCloud", type(cloud).__name__)
+    config = config or Config()
+    d = config.detect
+    threshold = d.threshold if threshold is None else threshold
+    beta = d.beta if beta is None else beta
+    none_likelihood = d.none_likelihood if none_likelihood is None else none_likelihood
+    context = d.context if context is None else context
     if not 0.0 < none_likelihood <= 1.0:
         raise InvalidParameterError("none_likelihood", "a number in (0, 1]", none_likelihood)
     ontology = ontology or builtin_ontology()

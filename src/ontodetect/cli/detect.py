@@ -35,9 +35,12 @@ def detect(
     indoor: float | None = typer.Option(None, "--indoor", help="P(indoor), Eq. 3.5."),
     up: str | None = typer.Option(None, "--up", help="Up axis: z (default), auto, y, -y, ..."),
     scale: float | None = typer.Option(None, "--scale", help="Scale factor k_s to metres."),
-    threshold: float = typer.Option(0.15, "--threshold", help="Decision threshold (Table 4.1)."),
-    beta: float = typer.Option(0.5, "--beta", help="Energy weight of the class probability."),
-    context: float = typer.Option(0.0, "--context", help="Seat-near-table pairwise strength."),
+    threshold: float | None = typer.Option(
+        None, "--threshold", help="Decision threshold (detect.threshold; Table 4.1: 0.15)."),
+    beta: float | None = typer.Option(
+        None, "--beta", help="Energy weight of the class probability (detect.beta)."),
+    context: float | None = typer.Option(
+        None, "--context", help="Seat-near-table pairwise strength (detect.context)."),
     seed: int = typer.Option(0, "--seed", help="Seed of every random step."),
     explain_: bool = typer.Option(False, "--explain",
                                   help="Print every constraint's probability and the label costs."),
