@@ -51,6 +51,8 @@ __all__ = [
     "builtin_library",
     "canonical_mesh",
     "grid_downsample",
+    "library_figure",
+    "make_model",
     "sample_surface",
     "visible_shell",
 ]
@@ -231,6 +233,9 @@ class CadModel:
     symmetry : int
         Rotations about z that leave the model unchanged: 1 none, 2 half a
         turn, 4 a quarter turn, 0 any (round).
+    anchor : (3,) float or None
+        Centre of the top of the seat (seating) or of the table top: fitting
+        starts by putting it on the object's.
     color : (3,) int
         Colour used when the scan has none.
     description : str
@@ -244,6 +249,7 @@ class CadModel:
     thin: Mesh
     dims: Mapping[str, float]
     symmetry: int = 1
+    anchor: tuple[float, float, float] | None = None
     color: tuple[int, int, int] = DEFAULT_COLOR
     description: str = ""
     source: str = "builtin"
@@ -322,11 +328,13 @@ def make_model(
     color: tuple[int, int, int] | None = None,
     description: str = "",
     thin_parts: Iterable[Mesh] | None = None,
+    anchor: ArrayLike | None = None,
 ) -> CadModel:
     """A model from solid parts: full = the solids, thin = their :func:`visible_shell`.
 
     ``dims`` gives the class-specific sizes (``seat_height`` ...); overall width,
-    depth and height are measured. The parts are moved to the canonical frame.
+    depth and height are measured. The parts (and the ``anchor`` point given in
+    their frame) are moved to the canonical frame.
     """
     solids = list(parts)
     full = M.concatenate(solids)
@@ -334,6 +342,8 @@ def make_model(
     thin = M.concatenate([visible_shell(m) for m in thin_src])
     full, shift = canonical_mesh(full)
     thin = thin.translated(shift)
+    moved = None if anchor is None else tuple(
+        float(v) for v in np.asarray(anchor, dtype=np.float64) + shift)
     return CadModel(
         name=name,
         label=label,
@@ -341,6 +351,7 @@ def make_model(
         thin=thin,
         dims=_dims_of(full, dims),
         symmetry=symmetry,
+        anchor=moved,
         color=color or LABEL_COLORS.get(label, DEFAULT_COLOR),
         description=description,
     )
@@ -460,7 +471,7 @@ def _chair_4leg(arms: bool) -> CadModel:
     text = "Four-legged chair" + (" with armrests" if arms else "") + ", panel backrest."
     return make_model(name, "chair", parts,
                       {"seat_height": sh, "seat_width": sw, "seat_depth": sd},
-                      description=text)
+                      description=text, anchor=(0.0, 0.0, sh))
 
 
 def _chair_office() -> CadModel:
@@ -488,7 +499,8 @@ def _chair_office() -> CadModel:
         parts.append(M.box_between((x - 0.015, -0.06, sh - st), (x + 0.015, -0.02, top - 0.03)))
     return make_model("chair-office", "chair", parts,
                       {"seat_height": sh, "seat_width": sw, "seat_depth": sd},
-                      description="Office swivel chair: five-star base, armrests.")
+                      description="Office swivel chair: five-star base, armrests.",
+                      anchor=(0.0, 0.02, sh))
 
 
 def _upholstered(name: str, label: str, inner: float, seats: int, arm: float,
@@ -519,7 +531,8 @@ def _upholstered(name: str, label: str, inner: float, seats: int, arm: float,
                                     center=(sx * (W / 2 - 0.06), sy * (D / 2 - 0.06), 0.0)))
     return make_model(name, label, parts,
                       {"seat_height": seat_h, "seat_width": inner, "seat_depth": D - back_t -
-                       back_cushion}, description=text)
+                       back_cushion}, description=text,
+                      anchor=(0.0, (y0 + D / 2) / 2, seat_h))
 
 
 def _rect_table(name: str, width: float, depth: float, height: float, symmetry: int,
@@ -536,7 +549,7 @@ def _rect_table(name: str, width: float, depth: float, height: float, symmetry: 
             parts.append(M.box_between((sx * lx - 0.01, -ly, z0), (sx * lx + 0.01, ly, z1)))
     return make_model(name, "table", parts,
                       {"top_height": height, "top_width": width, "top_depth": depth},
-                      symmetry=symmetry, description=text)
+                      symmetry=symmetry, description=text, anchor=(0.0, 0.0, height))
 
 
 def _round_table() -> CadModel:
@@ -548,7 +561,8 @@ def _round_table() -> CadModel:
     ]
     return make_model("table-round", "table", parts,
                       {"top_height": h, "top_width": d, "top_depth": d}, symmetry=0,
-                      description="Round table on a central pedestal and disc foot.")
+                      description="Round table on a central pedestal and disc foot.",
+                      anchor=(0.0, 0.0, h))
 
 
 def _desk() -> CadModel:
@@ -562,7 +576,8 @@ def _desk() -> CadModel:
                                (w / 2 - 0.06, -d / 2 + 0.078, h - t)))
     return make_model("desk", "table", parts,
                       {"top_height": h, "top_width": w, "top_depth": d}, symmetry=1,
-                      description="Desk on two panel legs with a modesty panel at the back.")
+                      description="Desk on two panel legs with a modesty panel at the back.",
+                      anchor=(0.0, 0.0, h))
 
 
 @functools.lru_cache(maxsize=1)
@@ -593,3 +608,73 @@ def builtin_library() -> ModelLibrary:
                     "Low coffee table on four legs.", apron=False),
         _desk(),
     ])
+
+
+# ---------------------------------------------------------------------------------------
+# A picture of a library
+
+#: Light direction of the shaded full models, and the view of every panel (degrees).
+LIGHT = np.array([0.4, 0.6, 0.7]) / np.linalg.norm([0.4, 0.6, 0.7])
+VIEW = (22.0, 55.0)
+
+
+def library_figure(
+    library: ModelLibrary, names: Iterable[str] | None = None, *, spacing: float = 0.015,
+    seed: int = 0, columns: int = 6,
+) -> Any:
+    """A Matplotlib figure of models: the thin profile's samples above the shaded full model.
+
+    Parameters
+    ----------
+    library : ModelLibrary
+    names : iterable of str, optional
+        Models to draw (all by default).
+    spacing : float
+        Grid (m) of the drawn samples of the thin profile.
+    seed : int
+        Seed of the sampling.
+    columns : int
+        Models per row.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Not attached to any window; save it with ``fig.savefig(path)``.
+    """
+    from matplotlib.figure import Figure
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    chosen = list(library) if names is None else list(names)
+    models = [library[n] for n in chosen]
+    cols = max(1, min(columns, len(models)))
+    groups = math.ceil(len(models) / cols) if models else 1
+    fig = Figure(figsize=(2.6 * cols, 5.0 * groups), layout="constrained")
+    for k, model in enumerate(models):
+        g, c = divmod(k, cols)
+        size = float(max(model.dims["width"], model.dims["depth"], model.dims["height"]))
+        lo, hi = model.full.bounds
+        mid = (lo + hi) / 2
+        for row in (0, 1):
+            ax = fig.add_subplot(2 * groups, cols, (2 * g + row) * cols + c + 1,
+                                 projection="3d")
+            if row == 0:
+                pts = model.points(spacing, seed)
+                ax.scatter(pts[:, 0], pts[:, 1], pts[:, 2], s=0.3, c=pts[:, 2], cmap="viridis",
+                           linewidths=0)
+                ax.set_title(f"{model.name}\nthin ({len(pts):,} pts)", fontsize=8)
+            else:
+                tri = model.full.vertices[model.full.triangles]
+                normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+                normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-12)
+                shade = 0.35 + 0.65 * np.clip(normal @ LIGHT, 0.0, 1.0)
+                base = np.asarray(model.color, dtype=np.float64) / 255.0
+                ax.add_collection3d(Poly3DCollection(
+                    tri, facecolors=np.clip(shade[:, None] * base, 0, 1), linewidths=0))
+                ax.set_title(f"full ({len(model.full.triangles):,} triangles)", fontsize=8)
+            ax.set_xlim(mid[0] - size / 2, mid[0] + size / 2)
+            ax.set_ylim(mid[1] - size / 2, mid[1] + size / 2)
+            ax.set_zlim(0.0, size)
+            ax.set_box_aspect((1, 1, 1))
+            ax.view_init(*VIEW)
+            ax.set_axis_off()
+    return fig
