@@ -17,6 +17,7 @@ from __future__ import annotations
 from ._calibrate import (
     CalibrationResult,
     ConstraintFit,
+    FitSettings,
     SceneSamples,
     SceneSplit,
     calibrate_dataset,
@@ -72,6 +73,7 @@ __all__ = [
     "ConstraintFit",
     "DatasetEvaluation",
     "Evaluation",
+    "FitSettings",
     "Instance",
     "LoadedScene",
     "MatchResult",

@@ -5,18 +5,20 @@ cluster that overlaps it most (point IoU, at least :data:`MIN_CLUSTER_IOU`) is s
 against the class with :func:`~ontodetect.ontology.score_class`; the best assignment of
 its planes to the class's parts gives one measured value of every constraint of the
 class (part, relation and cluster features). Each Gaussian is then re-estimated by
-maximum likelihood with a floor on σ:
+maximum likelihood with a floor on σ (:class:`FitSettings`):
 
 - two-sided ``{mean, sigma}`` and ranges ``[low, high]``: μ = sample mean,
   σ = max(sample std, :data:`PRIOR_SIGMA_SHARE` × prior σ, per-feature absolute floor);
   a range is written back as [μ − σ, μ + σ];
-- one-sided ``{min: a}`` / ``{max: b}`` stay one-sided: the bound moves to the
-  :data:`ONE_SIDED_QUANTILE` (or 1 − it) quantile of the values, so that most objects
+- one-sided ``{min: a}`` / ``{max: b}`` stay one-sided: the bound moves to the smallest
+  (largest) value, or the :data:`ONE_SIDED_QUANTILE` quantile, so that the objects seen
   score 1, and ``soft`` (if the file has it) becomes the floored sample std;
-- plateaus ``{min: a, max: b, soft: s}`` stay plateaus: both bounds move to those
-  quantiles, ``soft`` becomes the floored sample std.
+- plateaus ``{min: a, max: b, soft: s}`` stay plateaus: both ends move the same way,
+  ``soft`` becomes the floored sample std.
 
-Constraints with fewer than :data:`MIN_SAMPLES` values keep their prior. The YAML
+Constraints with fewer than :data:`MIN_SAMPLES` values, or with values from fewer than
+:data:`MIN_ROOMS` rooms (rescans of a room measure the same objects again), keep their
+prior. The YAML
 keeps its structure (same classes, parts, relations and keys; only numbers change);
 comments are not kept.
 
@@ -27,9 +29,11 @@ compare detection before and after.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 import os
+import textwrap
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from importlib import resources
@@ -57,6 +61,7 @@ from ._match import Instance, instances_from_labels, overlap_matrix
 __all__ = [
     "CalibrationResult",
     "ConstraintFit",
+    "FitSettings",
     "SceneSamples",
     "SceneSplit",
     "calibrate_dataset",
@@ -70,10 +75,14 @@ __all__ = [
 #: A ground-truth object calibrates only through a cluster with at least this point IoU
 #: (the overlap a detection needs to count, DESIGN.md).
 MIN_CLUSTER_IOU = 0.25
-#: Constraints measured fewer times than this keep their prior.
+#: Constraints measured fewer times than this keep their prior...
 MIN_SAMPLES = 3
-#: σ is never below this share of the prior's σ...
-PRIOR_SIGMA_SHARE = 0.25
+#: ...and so do constraints measured in fewer rooms than this.
+MIN_ROOMS = 2
+#: σ is never below this share of the prior's σ... On held-out ScanNet rooms a quarter let
+#: σ shrink so far that objects of other rooms failed several constraints at once (every
+#: factor multiplies); half kept recall.
+PRIOR_SIGMA_SHARE = 0.5
 #: ...nor below these absolute floors (units of the feature: m, degrees, m², ratios).
 ABS_SIGMA_FLOOR: dict[str, float] = {
     "tilt": 1.0,
@@ -92,11 +101,17 @@ ABS_SIGMA_FLOOR: dict[str, float] = {
     "rise": 0.02,
     "planes": 0.5,
 }
-#: A one-sided bound moves to this quantile of the values (``min``; 1 - it for ``max``).
-ONE_SIDED_QUANTILE = 0.05
+#: A one-sided bound or plateau end moves to this quantile of the values (``min``; 1 - it
+#: for ``max``). 0 takes the extreme value, the maximum-likelihood end of a flat range; a
+#: larger share ignores outliers but, with a few dozen objects, cuts off real ones.
+ONE_SIDED_QUANTILE = 0.0
 #: Significant digits of the numbers written to the calibrated file (more when needed).
 DIGITS = 4
 MAX_DIGITS = 15
+#: Strings longer than this are written as folded blocks.
+LONG_TEXT = 60
+#: Width of the lines of the written file.
+LINE_WIDTH = 96
 
 #: A constraint's place in the YAML: (class, "parts", part, feature),
 #: (class, "relations", index, feature) or (class, "cluster", feature).
@@ -337,12 +352,54 @@ def collect_scene_samples(
 
 
 # -- fitting -------------------------------------------------------------------------------
-def sigma_floor(prior: Any, feature: str) -> float:
+@dataclass(frozen=True)
+class FitSettings:
+    """How constraints are re-estimated (see the module docstring).
+
+    Attributes
+    ----------
+    prior_share : float
+        σ is at least this share of the prior's σ (:data:`PRIOR_SIGMA_SHARE`).
+    quantile : float
+        One-sided bounds and plateau ends move to this quantile of the values (and
+        1 − it); 0 is the smallest (largest) value (:data:`ONE_SIDED_QUANTILE`).
+    min_samples : int
+        Fewer values keep the prior (:data:`MIN_SAMPLES`).
+    min_rooms : int
+        Values from fewer rooms keep the prior (:data:`MIN_ROOMS`): rescans of one
+        room measure the same objects again, so they say little about other rooms.
+    """
+
+    prior_share: float = PRIOR_SIGMA_SHARE
+    quantile: float = ONE_SIDED_QUANTILE
+    min_samples: int = MIN_SAMPLES
+    min_rooms: int = MIN_ROOMS
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.prior_share, (int, float)) and self.prior_share >= 0.0):
+            raise InvalidParameterError("prior_share", "a number >= 0", self.prior_share)
+        if not (isinstance(self.quantile, (int, float)) and 0.0 <= self.quantile < 0.5):
+            raise InvalidParameterError("quantile", "a number in [0, 0.5)", self.quantile)
+        for name in ("min_samples", "min_rooms"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise InvalidParameterError(name, "a positive integer", value)
+
+
+def sigma_floor(prior: Any, feature: str, prior_share: float = PRIOR_SIGMA_SHARE) -> float:
     """The least σ a calibrated constraint may have."""
-    return max(PRIOR_SIGMA_SHARE * prior.sigma, ABS_SIGMA_FLOOR.get(feature, 0.0))
+    return max(prior_share * prior.sigma, ABS_SIGMA_FLOOR.get(feature, 0.0))
 
 
-def fit_gaussian(prior: Any, values: Sequence[float], feature: str) -> Any:
+def fit_gaussian(
+    prior: Any,
+    values: Sequence[float],
+    feature: str,
+    *,
+    prior_share: float = PRIOR_SIGMA_SHARE,
+    quantile: float = ONE_SIDED_QUANTILE,
+    min_samples: int = MIN_SAMPLES,
+) -> Any:
     """Maximum-likelihood re-estimate of one constraint, with floors; keeps its side.
 
     Parameters
@@ -353,29 +410,38 @@ def fit_gaussian(prior: Any, values: Sequence[float], feature: str) -> Any:
         Measured values.
     feature : str
         Feature name (selects the absolute σ floor).
+    prior_share : float
+        σ is at least this share of the prior's σ.
+    quantile : float
+        Where one-sided bounds and plateau ends move (0: the extreme value).
+    min_samples : int
+        Fewer finite values keep the prior.
 
     Returns
     -------
     Gaussian
-        The prior itself with fewer than :data:`MIN_SAMPLES` values.
+        The prior itself when there are too few values or its form is not known.
 
     Examples
     --------
     >>> from ontodetect.ontology import Gaussian
-    >>> g = fit_gaussian(Gaussian(0.55, 0.2), [0.44, 0.46, 0.48], "height")
+    >>> g = fit_gaussian(Gaussian(0.55, 0.2), [0.44, 0.46, 0.48], "height", prior_share=0.25)
     >>> round(g.mean, 3), round(g.sigma, 3)   # std 0.016 is below 25 % of 0.2
     (0.46, 0.05)
+    >>> g = fit_gaussian(Gaussian(0.45, 0.2, "min"), [0.7, 0.8, 0.9], "fill", quantile=0.0)
+    >>> g.side, round(g.mean, 2)              # stays one-sided; the bound moves
+    ('min', 0.7)
     """
     from ..ontology import Gaussian
 
     x = np.asarray(values, dtype=np.float64)
     x = x[np.isfinite(x)]
-    if len(x) < MIN_SAMPLES:
+    if len(x) < max(min_samples, 1):
         return prior
-    floor = sigma_floor(prior, feature)
+    floor = sigma_floor(prior, feature, prior_share)
     sigma = max(float(x.std()), floor)
-    low = float(np.quantile(x, ONE_SIDED_QUANTILE))
-    high = float(np.quantile(x, 1.0 - ONE_SIDED_QUANTILE))
+    low = float(np.quantile(x, quantile))
+    high = float(np.quantile(x, 1.0 - quantile))
     if prior.side == "min":
         return Gaussian(low, sigma, "min")
     if prior.side == "max":
@@ -501,7 +567,14 @@ def _represent_list(dumper: yaml.SafeDumper, data: list[Any]) -> yaml.Node:
     return dumper.represent_sequence("tag:yaml.org,2002:seq", data, flow_style=flow)
 
 
+def _represent_str(dumper: yaml.SafeDumper, data: str) -> yaml.Node:
+    # Long descriptions as folded blocks (``>``), as people write them.
+    style = ">" if len(data) > LONG_TEXT or "\n" in data.rstrip("\n") else None
+    return dumper.represent_scalar("tag:yaml.org,2002:str", data, style=style)
+
+
 _Dumper.add_representer(dict, _represent_dict)
+_Dumper.add_representer(str, _represent_str)
 _Dumper.add_representer(list, _represent_list)
 
 
@@ -523,6 +596,8 @@ def calibrate_ontology(
     text: str,
     values: Mapping[ConstraintPath, Sequence[float]],
     *,
+    rooms: Mapping[ConstraintPath, int] | None = None,
+    settings: FitSettings | None = None,
     source: str | None = None,
     comment: str | None = None,
 ) -> tuple[str, list[ConstraintFit]]:
@@ -534,6 +609,11 @@ def calibrate_ontology(
         The ontology's YAML.
     values : mapping
         Constraint path (see :func:`constraint_values`) -> measured values.
+    rooms : mapping, optional
+        Constraint path -> number of rooms its values come from; constraints measured
+        in fewer than ``settings.min_rooms`` keep their prior. Not checked when omitted.
+    settings : FitSettings, optional
+        Floors, quantile and minimum counts (defaults: the module constants).
     source : str, optional
         Name of the file, for error messages.
     comment : str, optional
@@ -551,16 +631,31 @@ def calibrate_ontology(
 
     ontology = parse_ontology(text, source)
     data = yaml.safe_load(text)
+    settings = settings or FitSettings()
     fits = []
     for path, prior in _constraint_paths(ontology):
         vals = list(values.get(path, ()))
-        after = fit_gaussian(prior, vals, path[-1])
+        after = prior
+        if rooms is None or rooms.get(path, 0) >= settings.min_rooms:
+            after = fit_gaussian(
+                prior,
+                vals,
+                path[-1],
+                prior_share=settings.prior_share,
+                quantile=settings.quantile,
+                min_samples=settings.min_samples,
+            )
         fits.append(ConstraintFit(path, prior, after, len(vals)))
         if after is not prior:
             container, key = _spec_at(data, path)
             container[key] = _write_spec(container[key], after)
-    body = yaml.dump(data, Dumper=_Dumper, sort_keys=False, allow_unicode=True, width=96)
-    head = "".join(f"# {line}\n" if line else "#\n" for line in (comment or "").splitlines())
+    body = yaml.dump(data, Dumper=_Dumper, sort_keys=False, allow_unicode=True, width=LINE_WIDTH)
+    lines = [
+        w
+        for line in (comment or "").splitlines()
+        for w in (textwrap.wrap(line, LINE_WIDTH - 2) or [""])
+    ]
+    head = "".join(f"# {line}\n" if line else "#\n" for line in lines)
     new_text = head + body
     parse_ontology(new_text, source)  # the result must be a valid ontology
     return new_text, fits
@@ -587,6 +682,7 @@ class CalibrationResult:
         Detection on the held-out scenes with ``base`` and with ``ontology``.
     failed : list of str
         Calibration scenes that could not be read, with the reason.
+    settings : FitSettings
     """
 
     text: str
@@ -599,6 +695,7 @@ class CalibrationResult:
     before: DatasetEvaluation | None = None
     after: DatasetEvaluation | None = None
     failed: list[str] = field(default_factory=list)
+    settings: FitSettings = field(default_factory=FitSettings)
 
     def comparison(self) -> list[dict[str, Any]]:
         """Per class and overall: precision and recall on the held-out scenes, before/after."""
@@ -626,6 +723,7 @@ class CalibrationResult:
     def to_dict(self) -> dict[str, Any]:
         return {
             "split": self.split.to_dict(),
+            "settings": dataclasses.asdict(self.settings),
             "used": self.used,
             "skipped": self.skipped,
             "failed": self.failed,
@@ -660,6 +758,7 @@ def calibrate_dataset(
     jobs: int = 1,
     detect_options: Mapping[str, Any] | None = None,
     min_iou: float = MIN_CLUSTER_IOU,
+    settings: FitSettings | None = None,
     evaluate: bool = True,
     scenes: Sequence[SceneSource] | None = None,
 ) -> CalibrationResult:
@@ -685,6 +784,8 @@ def calibrate_dataset(
         calibration measures.
     min_iou : float
         Least point IoU between an object and the cluster that measures it.
+    settings : FitSettings, optional
+        σ floor, quantile and minimum counts of the fit.
     evaluate : bool
         Detect on the held-out scenes with the base and the calibrated ontology.
     scenes : sequence of SceneSource, optional
@@ -713,26 +814,41 @@ def calibrate_dataset(
     )
     samples = map_scenes(work, parts.calibration, jobs=jobs, description="Measuring objects")
     values: dict[ConstraintPath, list[float]] = {}
+    rooms: dict[ConstraintPath, set[str]] = {}
     used: dict[str, int] = {}
     skipped: dict[str, int] = {}
     failed = []
-    for s in samples:  # scene order: the same values in the same order for any ``jobs``
+    for unit, s in zip(parts.calibration, samples):
+        # Scene order: the same values in the same order for any ``jobs``.
         if s.error is not None:
             failed.append(f"{s.name}: {s.error}")
             continue
         for p, v in s.values.items():
             values.setdefault(p, []).extend(v)
+            rooms.setdefault(p, set()).add(unit.group)
         for d, src in ((used, s.used), (skipped, s.skipped)):
             for k, n in src.items():
                 d[k] = d.get(k, 0) + n
+    settings = settings or FitSettings()
     name = Path(path).name or str(path)
+    counts = ", ".join(f"{n} {c}" for c, n in sorted(used.items())) or "none"
     comment = (
-        f"Calibrated by 'ontodetect calibrate' from {source} on {name}: "
-        f"{sum(used.values())} objects ({', '.join(f'{n} {c}' for c, n in sorted(used.items()))})"
-        f"\nin {len(parts.calibration)} scenes; {parts.describe()}."
-        "\nOnly numbers changed; the comments of the original file are not kept."
+        f"Calibrated by 'ontodetect calibrate' from {source} on {name}:\n"
+        f"{sum(used.values())} objects ({counts}) in {len(parts.calibration)} scenes;\n"
+        f"{parts.describe()}.\n"
+        f"sigma >= {settings.prior_share:g} x the original, bounds at quantile "
+        f"{settings.quantile:g}, at least {settings.min_samples} values from "
+        f"{settings.min_rooms} rooms.\n"
+        "Only numbers changed; the comments of the original file are not kept."
     )
-    new_text, fits = calibrate_ontology(text, values, source=source, comment=comment)
+    new_text, fits = calibrate_ontology(
+        text,
+        values,
+        rooms={p: len(r) for p, r in rooms.items()},
+        settings=settings,
+        source=source,
+        comment=comment,
+    )
     new_onto = parse_ontology(new_text, source)
     before = after = None
     if evaluate and parts.held_out:
@@ -751,5 +867,5 @@ def calibrate_dataset(
             on_error="skip",
         )
     return CalibrationResult(
-        new_text, new_onto, base_onto, parts, fits, used, skipped, before, after, failed
+        new_text, new_onto, base_onto, parts, fits, used, skipped, before, after, failed, settings
     )

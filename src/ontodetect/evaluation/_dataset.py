@@ -58,6 +58,7 @@ __all__ = [
     "evaluate_scene",
     "evaluation_classes",
     "load_scene",
+    "map_scenes",
     "read_scene_detections",
     "scene_group",
     "summarize_outcomes",
@@ -84,19 +85,6 @@ EVALUATION_FORMAT = "ontodetect.evaluation/1"
 _VOTENET_SUFFIX = "_vert.npy"
 _SCANNET_MESH = "_vh_clean_2.ply"
 _SCAN_ID = re.compile(r"(scene\d{4})_\d{2}")
-_DETECT_KEYS = (
-    "config",
-    "ontology",
-    "room",
-    "indoor",
-    "threshold",
-    "beta",
-    "none_likelihood",
-    "context",
-    "seed",
-    "up",
-    "scale",
-)
 
 
 class SceneError(OntoDetectError):
@@ -439,12 +427,21 @@ class SceneOutcome:
         return out
 
 
+@functools.cache
+def _detect_keys() -> tuple[str, ...]:
+    import inspect
+
+    from ..pipeline import detect
+
+    return tuple(p for p in inspect.signature(detect).parameters if p != "cloud")
+
+
 def _check_detect_options(options: Mapping[str, Any] | None) -> dict[str, Any]:
     opts = dict(options or {})
     for key in opts:
-        if key not in _DETECT_KEYS:
+        if key not in _detect_keys():
             raise InvalidParameterError(
-                "detect_options", f"a mapping with keys among {', '.join(_DETECT_KEYS)}", key
+                "detect_options", f"a mapping with keys among {', '.join(_detect_keys())}", key
             )
     return opts
 

@@ -1,0 +1,135 @@
+"""``ontodetect calibrate DATASET -o my-ontology.yaml``: fit an ontology's Gaussians to labels."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import typer
+from rich.table import Table
+
+from ..evaluation import FitSettings, calibrate_dataset
+from ..evaluation._calibrate import MIN_ROOMS, ONE_SIDED_QUANTILE, PRIOR_SIGMA_SHARE
+from ..evaluation._dataset import DATASET_FORMATS
+from ..io import atomic_write_text
+from . import app
+from ._console import console, reporting, state
+from .evaluate import detect_options
+
+
+def _pct(x: float) -> str:
+    return f"{100 * x:.1f}"
+
+
+@app.command()
+def calibrate(
+    dataset: Path = typer.Argument(..., help="Labelled dataset folder."),
+    out: Path = typer.Option(..., "--out", "-o", help="Calibrated ontology YAML to write."),
+    ontology: Path | None = typer.Option(
+        None, "--ontology", help="Ontology file to calibrate (default: the built-in one)."
+    ),
+    split: float = typer.Option(
+        0.5, "--split", help="Share of the rooms used for calibration; the rest is held out."
+    ),
+    seed: int = typer.Option(0, "--seed", help="Seed of the split."),
+    format: str = typer.Option(
+        "auto", "--format", "-f", help=f"Dataset layout: {', '.join(DATASET_FORMATS)}."
+    ),
+    jobs: int = typer.Option(1, "--jobs", "-j", help="Scenes in parallel (0: one per CPU)."),
+    sigma_floor: float = typer.Option(
+        PRIOR_SIGMA_SHARE,
+        "--sigma-floor",
+        help="A calibrated sigma is at least this share of the original sigma.",
+    ),
+    quantile: float = typer.Option(
+        ONE_SIDED_QUANTILE,
+        "--quantile",
+        help="One-sided bounds and plateau ends move to this "
+        "quantile of the measured values (0: the extreme value).",
+    ),
+    min_rooms: int = typer.Option(
+        MIN_ROOMS,
+        "--min-rooms",
+        help="Keep a constraint unless objects of this many rooms measured it.",
+    ),
+    report: Path | None = typer.Option(
+        None,
+        "--report",
+        help="Also write the split, every constraint before/after and the "
+        "held-out comparison as JSON.",
+    ),
+    evaluate: bool = typer.Option(
+        True,
+        "--evaluate/--no-evaluate",
+        help="Compare detection before/after on the held-out scenes.",
+    ),
+    config: Path | None = typer.Option(None, "--config", "-c", help="Configuration YAML."),
+    set_: list[str] = typer.Option(
+        [],
+        "--set",
+        metavar="KEY=VALUE",
+        help="Override one parameter, e.g. --set cluster.radius=0.04",
+    ),
+    room: str | None = typer.Option(
+        None, "--room", help="Room category for the prior in the held-out comparison."
+    ),
+    up: str | None = typer.Option(None, "--up", help="Up axis: z (default), auto, y, -y, ..."),
+    scale: float | None = typer.Option(None, "--scale", help="Scale factor k_s to metres."),
+    threshold: float | None = typer.Option(
+        None, "--threshold", help="Decision threshold (detect.threshold; Table 4.1: 0.15)."
+    ),
+) -> None:
+    """Estimate each constraint's mean and sigma from labelled objects; check on held-out rooms."""
+    opts = detect_options(
+        config, set_, None, False, room, None, None, up, scale, threshold, None, None, 0
+    )
+    settings = FitSettings(prior_share=sigma_floor, quantile=quantile, min_rooms=min_rooms)
+    with reporting():
+        result = calibrate_dataset(
+            dataset,
+            base=ontology,
+            format=format,
+            split=split,
+            seed=seed,
+            jobs=jobs,
+            detect_options=opts,
+            evaluate=evaluate,
+            settings=settings,
+        )
+    atomic_write_text(out, result.text)
+    if report is not None:
+        atomic_write_text(report, json.dumps(result.to_dict(), indent=1) + "\n")
+    if state.quiet:
+        return
+    console.print(result.split.describe())
+    used = ", ".join(f"{n} {c}" for c, n in sorted(result.used.items())) or "none"
+    skipped = ", ".join(f"{n} {c}" for c, n in sorted(result.skipped.items()))
+    console.print(
+        f"measured objects: {used}"
+        + (f" (no cluster with IoU >= 0.25: {skipped})" if skipped else "")
+    )
+    for line in result.failed:
+        console.print(f"[yellow]skipped[/] {line}")
+    changed = [f for f in result.fits if f.changed]
+    table = Table(title=f"{len(changed)} of {len(result.fits)} constraints calibrated")
+    for col in ("constraint", "n", "before", "after"):
+        table.add_column(col, justify="right" if col == "n" else "left")
+    for f in changed if state.verbose else changed[:40]:
+        table.add_row(f.name, str(f.samples), f.before.describe(), f.after.describe())
+    console.print(table)
+    rows = result.comparison()
+    if rows:
+        comp = Table(title="held-out scenes, point IoU >= 0.25")
+        for col in ("class", "GT", "P before %", "P after %", "R before %", "R after %"):
+            comp.add_column(col, justify="left" if col == "class" else "right")
+        for r in rows:
+            comp.add_row(
+                r["class"],
+                str(r["ground_truth"]),
+                _pct(r["precision_before"]),
+                _pct(r["precision_after"]),
+                _pct(r["recall_before"]),
+                _pct(r["recall_after"]),
+            )
+        console.print(comp)
+    console.print(f"wrote {out}" + (f", {report}" if report is not None else ""))

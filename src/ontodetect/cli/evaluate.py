@@ -1,0 +1,181 @@
+"""``ontodetect eval DATASET [-o REPORT_DIR]``: detect in every scene and score against labels."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+from rich.table import Table
+
+from ..evaluation import evaluate_dataset, write_report
+from ..evaluation._dataset import DATASET_FORMATS
+from ..evaluation._report import CRITERION_NAMES
+from . import app
+from ._common import load_config, load_ontology_option, room_option
+from ._console import console, reporting, state
+
+
+def detect_options(
+    config: Path | None,
+    set_: list[str],
+    ontology: list[Path] | None,
+    ontology_only: bool,
+    room: str | None,
+    room_probs: Path | None,
+    indoor: float | None,
+    up: str | None,
+    scale: float | None,
+    threshold: float | None,
+    beta: float | None,
+    context: float | None,
+    seed: int,
+) -> dict:
+    """Keyword arguments of ``pipeline.detect`` from the options ``detect`` also has.
+
+    Options left out (None) are not passed: the configuration's ``detect`` section decides.
+    """
+    opts: dict = {"config": load_config(config, set_), "seed": seed}
+    if ontology is not None:
+        opts["ontology"] = load_ontology_option(ontology, ontology_only)
+    given = {
+        "room": room_option(room, room_probs),
+        "indoor": indoor,
+        "up": up,
+        "scale": scale,
+        "threshold": threshold,
+        "beta": beta,
+        "context": context,
+    }
+    opts.update({k: v for k, v in given.items() if v is not None})
+    return opts
+
+
+def _pct(x: float) -> str:
+    return f"{100 * x:.1f}"
+
+
+@app.command("eval")
+def eval_(
+    dataset: Path = typer.Argument(..., help="Labelled dataset folder, or one scene."),
+    out: Path | None = typer.Option(
+        None,
+        "--out",
+        "-o",
+        help="Report folder: report.md, report.json, pr_curves.png, confusion.png.",
+    ),
+    format: str = typer.Option(
+        "auto", "--format", "-f", help=f"Dataset layout: {', '.join(DATASET_FORMATS)}."
+    ),
+    detections: Path | None = typer.Option(
+        None,
+        "--detections",
+        help="Score stored detections DIR/<scene>/detections.json instead of detecting.",
+    ),
+    save_detections: bool = typer.Option(
+        False,
+        "--save-detections",
+        help="Also write REPORT_DIR/detections/<scene>/detections.json (usable with --detections).",
+    ),
+    jobs: int = typer.Option(1, "--jobs", "-j", help="Scenes in parallel (0: one per CPU)."),
+    skip_failed: bool = typer.Option(
+        False, "--skip-failed", help="Leave out scenes that cannot be read, and list them."
+    ),
+    config: Path | None = typer.Option(None, "--config", "-c", help="Configuration YAML."),
+    set_: list[str] = typer.Option(
+        [],
+        "--set",
+        metavar="KEY=VALUE",
+        help="Override one parameter, e.g. --set cluster.radius=0.04",
+    ),
+    ontology: list[Path] = typer.Option(
+        [], "--ontology", help="Ontology YAML to add (repeatable)."
+    ),
+    ontology_only: bool = typer.Option(
+        False, "--ontology-only", help="Use only the --ontology files, not the built-ins."
+    ),
+    room: str | None = typer.Option(
+        None, "--room", help="Room category for the prior (Places205), the same for every scene."
+    ),
+    room_probs: Path | None = typer.Option(
+        None, "--room-probs", help="YAML/JSON mapping room category -> probability."
+    ),
+    indoor: float | None = typer.Option(None, "--indoor", help="P(indoor), Eq. 3.5."),
+    up: str | None = typer.Option(None, "--up", help="Up axis: z (default), auto, y, -y, ..."),
+    scale: float | None = typer.Option(None, "--scale", help="Scale factor k_s to metres."),
+    threshold: float | None = typer.Option(
+        None, "--threshold", help="Decision threshold (detect.threshold; Table 4.1: 0.15)."
+    ),
+    beta: float | None = typer.Option(
+        None, "--beta", help="Energy weight of the class probability (detect.beta)."
+    ),
+    context: float | None = typer.Option(
+        None, "--context", help="Seat-near-table pairwise strength (detect.context)."
+    ),
+    seed: int = typer.Option(0, "--seed", help="Seed of every random step."),
+) -> None:
+    """Evaluate detection on a labelled dataset: P, R, F1, AP per class, confusion, times."""
+    opts = detect_options(
+        config,
+        set_,
+        ontology if ontology or ontology_only else None,
+        ontology_only,
+        room,
+        room_probs,
+        indoor,
+        up,
+        scale,
+        threshold,
+        beta,
+        context,
+        seed,
+    )
+    if save_detections and out is None:
+        raise typer.BadParameter("needs --out REPORT_DIR", param_hint="--save-detections")
+    save_dir = out / "detections" if (save_detections and out is not None) else None
+    with reporting():
+        result = evaluate_dataset(
+            dataset,
+            format=format,
+            jobs=jobs,
+            detect_options=opts,
+            detections_dir=detections,
+            save_detections=save_dir,
+            on_error="skip" if skip_failed else "raise",
+        )
+        files = write_report(result, out) if out is not None else None
+    if state.quiet:
+        return
+    ev = result.primary
+    table = Table(
+        title=f"{dataset.name}: {len(result.scenes)} scenes, {CRITERION_NAMES['iou@0.25']}"
+    )
+    for col in ("class", "GT", "det", "TP", "P %", "R %", "F1 %", "AP %"):
+        table.add_column(col, justify="left" if col == "class" else "right")
+    for m in [*(ev.per_class[c] for c in ev.classes), ev.overall]:
+        ap = "-" if m.ap != m.ap else _pct(m.ap)  # NaN: no ground truth
+        table.add_row(
+            m.label,
+            str(m.num_gt),
+            str(m.num_pred),
+            str(m.tp),
+            _pct(m.precision),
+            _pct(m.recall),
+            _pct(m.f1),
+            ap,
+        )
+    console.print(table)
+    for key in ("iou@0.5", "distance"):
+        m = result.evaluations[key].overall
+        console.print(
+            f"{CRITERION_NAMES[key]}: precision {_pct(m.precision)} %, recall {_pct(m.recall)} %"
+        )
+    t = result.scene_seconds()
+    console.print(
+        f"detection per scene: mean {t['mean']:.2f} s, max {t['max']:.2f} s; "
+        f"{result.seconds:.1f} s in all ({result.jobs} worker"
+        f"{'s' if result.jobs != 1 else ''})"
+    )
+    for s in result.failed:
+        console.print(f"[yellow]skipped[/] {s.name}: {s.error}")
+    if files is not None:
+        console.print(f"wrote {files.markdown}, {files.json}, {files.pr_curves}, {files.confusion}")

@@ -1,0 +1,278 @@
+"""Calibration: the split by room, the fit with its floors, the YAML kept in shape."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+import yaml
+
+from ontodetect import InvalidParameterError
+from ontodetect.evaluation import (
+    FitSettings,
+    calibrate_dataset,
+    calibrate_ontology,
+    constraint_values,
+    discover_scenes,
+    fit_gaussian,
+    split_scenes,
+)
+from ontodetect.evaluation._calibrate import _builtin_text, _constraint_paths
+from ontodetect.ontology import ClusterDescription, Gaussian, parse_ontology, score_class
+
+SCANS = [
+    "scene0000_00",
+    "scene0000_01",
+    "scene0000_02",
+    "scene0002_00",
+    "scene0002_01",
+    "scene0003_00",
+    "scene0005_00",
+    "scene0005_01",
+    "scene0007_00",
+    "scene0010_00",
+]
+
+# Every constraint form the schema knows, with comments that calibration drops.
+ONTOLOGY = """\
+format: ontodetect.ontology/1
+description: A test ontology.
+classes:
+  chair:
+    matches: [chair]
+    cluster:
+      length: {max: 0.95, soft: 0.2}    # a comment
+      height: {min: 0.6, max: 1.3, soft: 0.15}
+    parts:
+      seat:
+        tilt: {max: 6}
+        height: [0.35, 0.75]
+        length: {range: [0.3, 0.7]}
+        fill: {min: 0.45}
+      backrest:
+        required: false
+        tilt: {min: 65, soft: 12}
+        height: {mean: 0.8, sigma: 0.2}
+        width: {min: 0.1, max: 0.6}
+    relations:
+      - between: [seat, backrest]
+        angle: {min: 60, soft: 12}
+        gap: {min: 0.08, soft: 0.06}
+    labeling:
+      plane_size: {mean: 0.45, sigma: 0.2}
+"""
+
+
+# -- split ---------------------------------------------------------------------------------
+@pytest.mark.parametrize("seed", range(8))
+def test_split_keeps_rescans_of_a_room_together(seed):
+    split = split_scenes(SCANS, 0.5, seed)
+    cal, held = set(split.calibration), set(split.held_out)
+    assert cal and held and not cal & held and cal | held == set(SCANS)
+    rooms_cal = {s[:9] for s in cal}
+    rooms_held = {s[:9] for s in held}
+    assert not rooms_cal & rooms_held
+    assert len(rooms_cal) == 3  # round(0.5 x 6 rooms)
+    assert split.calibration == [s for s in SCANS if s in cal]  # order kept
+    assert split_scenes(SCANS, 0.5, seed) == split  # same seed, same split
+
+
+def test_split_depends_on_the_seed_and_fraction():
+    splits = {tuple(split_scenes(SCANS, 0.5, s).calibration) for s in range(8)}
+    assert len(splits) > 1
+    assert len(split_scenes(SCANS, 0.2, 0).groups("calibration")) == 1
+    assert len(split_scenes(SCANS, 0.99, 0).groups("held_out")) == 1  # at least one aside
+    everything = split_scenes(SCANS, 1.0, 0)
+    assert everything.calibration == SCANS and everything.held_out == []
+    assert "held out" in split_scenes(SCANS, 0.5, 0).describe()
+
+
+@pytest.mark.parametrize(
+    ("fraction", "seed", "match"),
+    [(0.0, 0, "'split'"), (1.5, 0, "'split'"), (0.5, -1, "'seed'")],
+)
+def test_split_rejects_bad_parameters(fraction, seed, match):
+    with pytest.raises(InvalidParameterError, match=match):
+        split_scenes(SCANS, fraction, seed)
+
+
+def test_a_single_room_cannot_be_split():
+    with pytest.raises(InvalidParameterError, match="single room"):
+        split_scenes(["scene0000_00", "scene0000_01"], 0.5)
+    assert split_scenes(["scene0000_00"], 1.0).held_out == []
+
+
+# -- fit -----------------------------------------------------------------------------------
+def test_sigma_is_maximum_likelihood_above_its_floors():
+    prior = Gaussian(0.55, 0.2)
+    wide = [0.3, 0.5, 0.7, 0.5]
+    g = fit_gaussian(prior, wide, "height", prior_share=0.25)
+    assert g.mean == pytest.approx(0.5) and g.sigma == pytest.approx(np.std(wide))
+    same = [0.46] * 5
+    assert fit_gaussian(prior, same, "height", prior_share=0.25).sigma == pytest.approx(0.05)
+    assert fit_gaussian(prior, same, "height", prior_share=0.5).sigma == pytest.approx(0.1)
+    # The absolute floor wins over a small prior sigma: tilts are not known to 0.1 degree.
+    assert fit_gaussian(Gaussian(2.0, 0.4), [2.0] * 5, "tilt").sigma == pytest.approx(1.0)
+    assert fit_gaussian(Gaussian(2.0, 0.4), [2.0] * 5, "unknown", prior_share=0.5).sigma == 0.2
+
+
+def test_too_few_values_keep_the_prior():
+    prior = Gaussian(0.55, 0.2)
+    assert fit_gaussian(prior, [0.4, 0.5], "height") is prior
+    assert fit_gaussian(prior, [0.4, 0.5, np.nan, np.inf], "height") is prior
+
+
+def test_one_sided_constraints_stay_one_sided_and_move_their_bound():
+    x = [0.7, 0.8, 0.9, 0.6, 0.75]
+    lo = fit_gaussian(Gaussian(0.45, 0.2, "min"), x, "fill", quantile=0.0)
+    assert (lo.side, lo.mean) == ("min", 0.6)
+    hi = fit_gaussian(Gaussian(6.0, 5.0, "max"), [1.0, 2.0, 3.0, 4.0, 5.0], "tilt", quantile=0.25)
+    assert (hi.side, hi.mean) == ("max", 4.0)
+    plateau = fit_gaussian(Gaussian.plateau(0.3, 0.65, 0.12), x, "length", quantile=0.0)
+    assert (plateau.side, plateau.mean, plateau.upper) == ("plateau", 0.6, 0.9)
+    flat = fit_gaussian(Gaussian.plateau(0.3, 0.65, 0.12), [0.5] * 4, "length", prior_share=0.5)
+    assert flat.side == "plateau" and flat.upper - flat.mean == pytest.approx(0.06)
+
+
+def test_fit_settings_are_checked():
+    with pytest.raises(InvalidParameterError, match="'quantile'"):
+        FitSettings(quantile=0.5)
+    with pytest.raises(InvalidParameterError, match="'min_rooms'"):
+        FitSettings(min_rooms=0)
+
+
+# -- the YAML ------------------------------------------------------------------------------
+def _skeleton(node):
+    """The structure of a YAML document with every number replaced by its type."""
+    if isinstance(node, dict):
+        return {k: _skeleton(v) for k, v in node.items()}
+    if isinstance(node, list):
+        return [_skeleton(v) for v in node]
+    if isinstance(node, (int, float)) and not isinstance(node, bool):
+        return "number"
+    return node
+
+
+def _values_for_everything(text, rng):
+    onto = parse_ontology(text)
+    values = {}
+    for path, g in _constraint_paths(onto):
+        centre = (g.mean + g.upper) / 2 if g.side == "plateau" else g.mean
+        values[path] = list(rng.normal(centre, g.sigma / 3, 12))
+    return onto, values
+
+
+@pytest.mark.parametrize("which", ["test", "builtin"])
+def test_calibration_changes_only_numbers(which, rng):
+    text = ONTOLOGY if which == "test" else _builtin_text()
+    onto, values = _values_for_everything(text, rng)
+    new_text, fits = calibrate_ontology(text, values, comment="made by a test\nsecond line")
+    assert all(f.changed for f in fits) and len(fits) == len(values)
+    before, after = yaml.safe_load(text), yaml.safe_load(new_text)
+    assert _skeleton(after) == _skeleton(before)
+    assert after != before
+    new = parse_ontology(new_text)
+    assert new.names == onto.names
+    for (path, g_old), (_, g_new) in zip(_constraint_paths(onto), _constraint_paths(new)):
+        assert g_new.side == g_old.side, path
+    assert new_text.startswith("# made by a test\n# second line\n")
+    assert "a comment" not in new_text  # comments of the original are not kept
+
+
+def test_forms_are_kept_key_by_key(rng):
+    _, values = _values_for_everything(ONTOLOGY, rng)
+    after = yaml.safe_load(calibrate_ontology(ONTOLOGY, values)[0])
+    seat = after["classes"]["chair"]["parts"]["seat"]
+    assert isinstance(seat["height"], list) and len(seat["height"]) == 2
+    assert set(seat["length"]) == {"range"}
+    assert set(seat["tilt"]) == {"max"}  # no 'soft' added where the file had none
+    back = after["classes"]["chair"]["parts"]["backrest"]
+    assert set(back["height"]) == {"mean", "sigma"} and set(back["width"]) == {"min", "max"}
+    assert after["classes"]["chair"]["labeling"] == {"plane_size": {"mean": 0.45, "sigma": 0.2}}
+
+
+def test_constraints_seen_in_one_room_keep_their_prior(rng):
+    _, values = _values_for_everything(ONTOLOGY, rng)
+    rooms = dict.fromkeys(values, 2)
+    lonely = ("chair", "parts", "seat", "height")
+    rooms[lonely] = 1
+    _, fits = calibrate_ontology(ONTOLOGY, values, rooms=rooms)
+    assert [f.name for f in fits if not f.changed] == ["chair.parts.seat.height"]
+
+
+# -- measuring -----------------------------------------------------------------------------
+def _plane(tilt, height, z_min, z_max, length, width, area, centroid):
+    return SimpleNamespace(
+        tilt=tilt,
+        height=height,
+        z_min=z_min,
+        z_max=z_max,
+        length=length,
+        width=width,
+        area=area,
+        density=1000.0,
+        num_points=200,
+        normal=(0.0, 0.0, 1.0),
+        centroid=centroid,
+    )
+
+
+def test_constraint_values_are_the_features_of_the_best_assignment():
+    onto = parse_ontology(ONTOLOGY)
+    seat = _plane(2.0, 0.46, 0.45, 0.47, 0.45, 0.42, 0.17, (0.0, 0.0, 0.46))
+    back = _plane(85.0, 0.75, 0.5, 1.0, 0.45, 0.4, 0.16, (0.0, 0.2, 0.75))
+    relation = SimpleNamespace(angle=83.0, distance=0.02, xy_overlap=0.1)
+    desc = ClusterDescription([back, seat], {(0, 1): relation}, 0.55, 0.5, 1.0, 0.0)
+    score = score_class(onto["chair"], desc)
+    assert dict(score.assignment) == {"seat": 1, "backrest": 0}
+    got = constraint_values(onto["chair"], score)
+    assert got[("chair", "parts", "seat", "height")] == 0.46
+    assert got[("chair", "parts", "seat", "fill")] == pytest.approx(0.17 / (0.45 * 0.42))
+    assert got[("chair", "parts", "backrest", "tilt")] == 85.0
+    assert got[("chair", "relations", 0, "angle")] == 83.0
+    assert got[("chair", "relations", 0, "gap")] == pytest.approx(0.75 - 0.46)
+    assert got[("chair", "cluster", "length")] == 0.55
+    assert len(got) == len(_constraint_paths(onto))
+
+
+# -- the whole procedure on simulated rooms ------------------------------------------------
+@pytest.fixture(scope="module")
+def tiny_rooms(tmp_path_factory):
+    from ontodetect.synth import synthesize_many
+
+    root = tmp_path_factory.mktemp("tiny")
+    synthesize_many(4, "tiny", "rgbd", seed=11, out_dir=root, points=12_000)
+    return root
+
+
+def test_calibration_never_reads_the_held_out_scenes(tiny_rooms, tmp_path):
+    import shutil
+
+    root = tmp_path / "rooms"
+    shutil.copytree(tiny_rooms, root)
+    split = split_scenes(discover_scenes(root), 0.5, seed=3)
+    for scene in split.held_out:  # make every held-out scene unreadable
+        (root / scene.name / "cloud.ply").write_bytes(b"ply\nbroken")
+    result = calibrate_dataset(
+        root, split=0.5, seed=3, evaluate=False, settings=FitSettings(min_samples=2)
+    )
+    assert result.failed == []
+    assert [s.name for s in result.split.held_out] == [s.name for s in split.held_out]
+    assert result.before is None and result.comparison() == []
+    assert sum(result.used.values()) > 0
+    assert parse_ontology(result.text).names == result.base.names
+
+
+def test_calibration_compares_before_and_after_on_held_out_scenes(tiny_rooms):
+    result = calibrate_dataset(tiny_rooms, split=0.5, seed=3, settings=FitSettings(min_samples=2))
+    held = [s.name for s in result.split.held_out]
+    assert [s.name for s in result.before.scenes] == held
+    assert [s.name for s in result.after.scenes] == held
+    rows = {r["class"]: r for r in result.comparison()}
+    assert set(rows) == {"chair", "sofa", "table", "overall"}
+    assert rows["overall"]["ground_truth"] == result.before.primary.overall.num_gt
+    doc = result.to_dict()
+    assert doc["split"]["held_out"] == held and doc["settings"]["min_samples"] == 2
+    with pytest.raises(InvalidParameterError, match="detect_options"):
+        calibrate_dataset(tiny_rooms, detect_options={"ontology": result.base})
