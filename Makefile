@@ -24,7 +24,7 @@ format: setup
 	$(VENV)/bin/ruff check --fix src tests benchmarks
 
 bench: setup
-	$(PY) -m benchmarks --help
+	$(PY) -m benchmarks all
 
 clean:
 	rm -rf $(VENV) $(OUT) build *.egg-info src/*.egg-info
