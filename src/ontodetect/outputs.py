@@ -59,10 +59,14 @@ def write_outputs(result: Result, out_dir: str | os.PathLike[str], *,
         counts: dict[str, int] = {}
         for d in result.detections:
             counts[d.label] = counts.get(d.label, 0) + 1
-        boxes = [BoxDrawing(d.center, d.size, d.yaw, d.label, f"{d.score:.2f}")
-                 for d in result.detections]
+        # Pictures are drawn in the levelled frame (z up, floor at 0), whatever the input's.
+        levelled = result.segmentation.prepared.cloud
+        boxes = []
+        for d in result.detections:
+            box = result.segmentation[d.cluster].box
+            boxes.append(BoxDrawing(box.center, box.size, box.yaw, d.label, f"{d.score:.2f}"))
         src = Path(str(cloud.meta.get("source", ""))).name or "scan"
-        png = render_scene(out / "detections.png", cloud.xyz, rgb=cloud.rgb,
+        png = render_scene(out / "detections.png", levelled.xyz, rgb=cloud.rgb,
                            point_class=point_class, boxes=boxes, legend_counts=counts,
                            title=title or f"{src}: {len(result.detections)} objects")
     return OutputFiles(det_path, ply_path, png)
