@@ -104,17 +104,38 @@ def test_a_single_room_cannot_be_split():
 
 
 # -- fit -----------------------------------------------------------------------------------
-def test_sigma_is_maximum_likelihood_above_its_floors():
+def test_sigma_is_the_predictive_spread_above_its_floors():
     prior = Gaussian(0.55, 0.2)
     wide = [0.3, 0.5, 0.7, 0.5]
-    g = fit_gaussian(prior, wide, "height", prior_share=0.25)
-    assert g.mean == pytest.approx(0.5) and g.sigma == pytest.approx(np.std(wide))
+    g = fit_gaussian(prior, wide, "height", prior_share=0.25, prior_strength=0)
+    # Without a prior: the sample mean, and the std widened by the predictive 1 + 1/n.
+    assert g.mean == pytest.approx(0.5)
+    assert g.sigma == pytest.approx(np.std(wide) * np.sqrt(1.25))
     same = [0.46] * 5
-    assert fit_gaussian(prior, same, "height", prior_share=0.25).sigma == pytest.approx(0.05)
-    assert fit_gaussian(prior, same, "height", prior_share=0.5).sigma == pytest.approx(0.1)
+    ml = {"prior_strength": 0}
+    assert fit_gaussian(prior, same, "height", prior_share=0.25, **ml).sigma == pytest.approx(0.05)
+    assert fit_gaussian(prior, same, "height", prior_share=0.5, **ml).sigma == pytest.approx(0.1)
     # The absolute floor wins over a small prior sigma: tilts are not known to 0.1 degree.
-    assert fit_gaussian(Gaussian(2.0, 0.4), [2.0] * 5, "tilt").sigma == pytest.approx(1.0)
-    assert fit_gaussian(Gaussian(2.0, 0.4), [2.0] * 5, "unknown", prior_share=0.5).sigma == 0.2
+    assert fit_gaussian(Gaussian(2.0, 0.4), [2.0] * 5, "tilt", **ml).sigma == pytest.approx(1.0)
+    assert (
+        fit_gaussian(Gaussian(2.0, 0.4), [2.0] * 5, "unknown", prior_share=0.5, **ml).sigma == 0.2
+    )
+
+
+def test_few_samples_stay_near_the_prior():
+    prior = Gaussian(0.55, 0.2)
+    values = [0.40, 0.41, 0.42]
+    few = fit_gaussian(prior, values, "height")  # 3 objects against 8
+    assert abs(few.mean - 0.55) < abs(few.mean - 0.41)
+    assert few.sigma > 0.15  # far from the 0.008 of the values
+    many = fit_gaussian(prior, values * 30, "height")
+    assert abs(many.mean - 0.41) < abs(few.mean - 0.41)
+    # 90 objects of two rooms are worth 2 x ROOM_SAMPLES: still near the prior.
+    rooms = fit_gaussian(prior, values * 30, "height", effective_samples=2 * 3)
+    assert abs(rooms.mean - 0.55) < abs(many.mean - 0.55)
+    # Data far from the prior widen sigma instead of narrowing it.
+    far = fit_gaussian(Gaussian(0.55, 0.05), [0.80, 0.81, 0.82, 0.8], "height")
+    assert far.sigma > 0.05
 
 
 def test_too_few_values_keep_the_prior():
@@ -123,21 +144,30 @@ def test_too_few_values_keep_the_prior():
     assert fit_gaussian(prior, [0.4, 0.5, np.nan, np.inf], "height") is prior
 
 
-def test_one_sided_constraints_stay_one_sided_and_move_their_bound():
-    x = [0.7, 0.8, 0.9, 0.6, 0.75]
-    lo = fit_gaussian(Gaussian(0.45, 0.2, "min"), x, "fill", quantile=0.0)
-    assert (lo.side, lo.mean) == ("min", 0.6)
-    hi = fit_gaussian(Gaussian(6.0, 5.0, "max"), [1.0, 2.0, 3.0, 4.0, 5.0], "tilt", quantile=0.25)
-    assert (hi.side, hi.mean) == ("max", 4.0)
-    plateau = fit_gaussian(Gaussian.plateau(0.3, 0.65, 0.12), x, "length", quantile=0.0)
-    assert (plateau.side, plateau.mean, plateau.upper) == ("plateau", 0.6, 0.9)
-    flat = fit_gaussian(Gaussian.plateau(0.3, 0.65, 0.12), [0.5] * 4, "length", prior_share=0.5)
-    assert flat.side == "plateau" and flat.upper - flat.mean == pytest.approx(0.06)
+def test_one_sided_constraints_stay_one_sided_and_only_loosen():
+    ml = {"prior_strength": 0, "quantile": 0.0}
+    below = [0.3, 0.4, 0.5]
+    lo = fit_gaussian(Gaussian(0.45, 0.2, "min"), below, "fill", **ml)
+    assert (lo.side, lo.mean) == ("min", pytest.approx(0.2))  # 0.3 minus the gap 0.2 / 2
+    inside = [0.7, 0.8, 0.9, 0.6, 0.75]
+    assert fit_gaussian(Gaussian(0.45, 0.2, "min"), inside, "fill", **ml).mean == 0.45
+    hi = fit_gaussian(Gaussian(3.0, 5.0, "max"), [1.0, 2.0, 3.0, 4.0, 5.0], "tilt", **ml)
+    assert (hi.side, hi.mean) == ("max", pytest.approx(6.0))
+    plateau = fit_gaussian(Gaussian.plateau(0.3, 0.65, 0.12), inside, "length", **ml)
+    assert plateau.side == "plateau"
+    assert (plateau.mean, plateau.upper) == (0.3, pytest.approx(0.9 + 0.3 / 4))
+    # With the prior's weight the bound moves only part of the way.
+    shrunk = fit_gaussian(Gaussian(0.45, 0.2, "min"), below, "fill", quantile=0.0)
+    assert 0.2 < shrunk.mean < 0.45
 
 
 def test_fit_settings_are_checked():
     with pytest.raises(InvalidParameterError, match="'quantile'"):
         FitSettings(quantile=0.5)
+    with pytest.raises(InvalidParameterError, match="'prior_strength'"):
+        FitSettings(prior_strength=-1.0)
+    with pytest.raises(InvalidParameterError, match="'validate'"):
+        FitSettings(validate="yes")
     with pytest.raises(InvalidParameterError, match="'min_rooms'"):
         FitSettings(min_rooms=0)
 
@@ -234,6 +264,59 @@ def test_constraint_values_are_the_features_of_the_best_assignment():
     assert got[("chair", "relations", 0, "gap")] == pytest.approx(0.75 - 0.46)
     assert got[("chair", "cluster", "length")] == 0.55
     assert len(got) == len(_constraint_paths(onto))
+
+
+# -- the nested check ----------------------------------------------------------------------
+def _chair_scene(name):
+    from ontodetect.evaluation import Instance
+    from ontodetect.evaluation._calibrate import ValidationScene
+
+    seat = _plane(2.0, 0.46, 0.45, 0.47, 0.45, 0.42, 0.17, (0.0, 0.0, 0.46))
+    back = _plane(85.0, 0.75, 0.5, 1.0, 0.45, 0.4, 0.16, (0.0, 0.2, 0.75))
+    relation = SimpleNamespace(angle=83.0, distance=0.02, xy_overlap=0.1)
+    desc = ClusterDescription([back, seat], {(0, 1): relation}, 0.55, 0.5, 1.0, 0.0)
+    members = np.arange(100)
+    return ValidationScene(
+        name, (desc,), np.zeros((1, 3)), (members,), (Instance.make(1, "chair", members),)
+    )
+
+
+def test_a_change_that_lowers_validation_f1_is_rejected():
+    from ontodetect.evaluation._calibrate import select_groups
+
+    seat_height = ("chair", "parts", "seat", "height")
+    cluster_length = ("chair", "cluster", "length")
+    # Seats measured at 1.5 m would make the chair of every validation room fail.
+    bad = {seat_height: [1.5, 1.52, 1.48, 1.5], cluster_length: [0.5, 0.55, 0.6]}
+    rooms = {r: bad for r in ("scene0001", "scene0002", "scene0003")}
+    scenes = {r: [_chair_scene(r + "_00")] for r in rooms}
+    settings = FitSettings(prior_strength=0.0)
+    accepted, decisions = select_groups(ONTOLOGY, rooms, scenes, settings=settings)
+    by_name = {d.name: d for d in decisions}
+    seat = by_name["chair.parts.seat"]
+    assert not seat.accepted and seat.f1_after["chair"] < seat.f1_before["chair"] == 1.0
+    assert ("chair", "parts", "seat") not in accepted
+    # A change that does not lower F1 but shows no gain either keeps the prior by default...
+    assert not by_name["chair.cluster"].accepted
+    # ...and is kept when ties are accepted.
+    ties = FitSettings(prior_strength=0.0, accept_ties=True)
+    tied, _ = select_groups(ONTOLOGY, rooms, scenes, settings=ties)
+    assert ("chair", "cluster") in tied and ("chair", "parts", "seat") not in tied
+    # The written file keeps the rejected group's prior.
+    text, fits = calibrate_ontology(ONTOLOGY, bad, groups=accepted)
+    assert yaml.safe_load(text) == yaml.safe_load(ONTOLOGY)
+    assert all(not f.changed for f in fits)
+    assert any("nested check" in f.note for f in fits)
+
+
+def test_one_room_cannot_be_checked_so_nothing_changes():
+    from ontodetect.evaluation._calibrate import select_groups
+
+    rooms = {"scene0001": {("chair", "cluster", "length"): [0.5, 0.55, 0.6]}}
+    accepted, decisions = select_groups(
+        ONTOLOGY, rooms, {"scene0001": [_chair_scene("scene0001_00")]}
+    )
+    assert accepted == set() and decisions == []
 
 
 # -- the whole procedure on simulated rooms ------------------------------------------------

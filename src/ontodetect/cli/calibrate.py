@@ -9,7 +9,12 @@ import typer
 from rich.table import Table
 
 from ..evaluation import FitSettings, calibrate_dataset
-from ..evaluation._calibrate import MIN_ROOMS, ONE_SIDED_QUANTILE, PRIOR_SIGMA_SHARE
+from ..evaluation._calibrate import (
+    MIN_ROOMS,
+    ONE_SIDED_QUANTILE,
+    PRIOR_SIGMA_SHARE,
+    PRIOR_STRENGTH,
+)
 from ..evaluation._dataset import DATASET_FORMATS
 from ..io import atomic_write_text
 from . import app
@@ -52,6 +57,16 @@ def calibrate(
         "--min-rooms",
         help="Keep a constraint unless objects of this many rooms measured it.",
     ),
+    prior_strength: float = typer.Option(
+        PRIOR_STRENGTH,
+        "--prior-strength",
+        help="Weight of the original values, in objects (0: plain maximum likelihood).",
+    ),
+    validate: bool = typer.Option(
+        True,
+        "--validate/--no-validate",
+        help="Keep a fitted part only if it does not lower F1 on calibration rooms left out.",
+    ),
     report: Path | None = typer.Option(
         None,
         "--report",
@@ -83,7 +98,13 @@ def calibrate(
     opts = detect_options(
         config, set_, None, False, room, None, None, up, scale, threshold, None, None, 0
     )
-    settings = FitSettings(prior_share=sigma_floor, quantile=quantile, min_rooms=min_rooms)
+    settings = FitSettings(
+        prior_share=sigma_floor,
+        quantile=quantile,
+        min_rooms=min_rooms,
+        prior_strength=prior_strength,
+        validate=validate,
+    )
     with reporting():
         result = calibrate_dataset(
             dataset,
@@ -110,6 +131,12 @@ def calibrate(
     )
     for line in result.failed:
         console.print(f"[yellow]skipped[/] {line}")
+    if result.decisions:
+        kept = [d.name for d in result.decisions if d.accepted]
+        console.print(
+            f"nested check on the calibration rooms: kept {len(kept)} of "
+            f"{len(result.decisions)} groups" + (f" ({', '.join(kept)})" if kept else "")
+        )
     changed = [f for f in result.fits if f.changed]
     table = Table(title=f"{len(changed)} of {len(result.fits)} constraints calibrated")
     for col in ("constraint", "n", "before", "after"):
@@ -120,7 +147,8 @@ def calibrate(
     rows = result.comparison()
     if rows:
         comp = Table(title="held-out scenes, point IoU >= 0.25")
-        for col in ("class", "GT", "P before %", "P after %", "R before %", "R after %"):
+        cols = ("class", "GT", "P before %", "P after %", "R before %", "R after %")
+        for col in (*cols, "F1 before %", "F1 after %"):
             comp.add_column(col, justify="left" if col == "class" else "right")
         for r in rows:
             comp.add_row(
@@ -130,6 +158,8 @@ def calibrate(
                 _pct(r["precision_after"]),
                 _pct(r["recall_before"]),
                 _pct(r["recall_after"]),
+                _pct(r["f1_before"]),
+                _pct(r["f1_after"]),
             )
         console.print(comp)
     console.print(f"wrote {out}" + (f", {report}" if report is not None else ""))

@@ -4,23 +4,41 @@ For every ground-truth object of a class in the calibration scenes, the segmenta
 cluster that overlaps it most (point IoU, at least :data:`MIN_CLUSTER_IOU`) is scored
 against the class with :func:`~ontodetect.ontology.score_class`; the best assignment of
 its planes to the class's parts gives one measured value of every constraint of the
-class (part, relation and cluster features). Each Gaussian is then re-estimated by
-maximum likelihood with a floor on σ (:class:`FitSettings`):
+class (part, relation and cluster features).
 
-- two-sided ``{mean, sigma}`` and ranges ``[low, high]``: μ = sample mean,
-  σ = max(sample std, :data:`PRIOR_SIGMA_SHARE` × prior σ, per-feature absolute floor);
-  a range is written back as [μ − σ, μ + σ];
-- one-sided ``{min: a}`` / ``{max: b}`` stay one-sided: the bound moves to the smallest
-  (largest) value, or the :data:`ONE_SIDED_QUANTILE` quantile, so that the objects seen
-  score 1, and ``soft`` (if the file has it) becomes the floored sample std;
-- plateaus ``{min: a, max: b, soft: s}`` stay plateaus: both ends move the same way,
-  ``soft`` becomes the floored sample std.
+Each Gaussian is then re-estimated as the posterior of a conjugate normal model whose
+prior is the ontology's own constraint, worth :data:`PRIOR_STRENGTH` objects
+(:class:`FitSettings`, :func:`fit_gaussian`). Objects of one room count as at most
+:data:`ROOM_SAMPLES` independent samples (a room's chairs are often copies of one model),
+so with few objects or rooms the estimate stays near the prior:
+
+- two-sided ``{mean, sigma}`` and ranges ``[low, high]``: μ and σ² are the blends
+  ``(1 − w) μ0 + w x̄`` and ``(1 − w) σ0² + w s² + w (1 − w) (x̄ − μ0)²`` with
+  ``w = n / (κ0 + n)``; the last term widens σ when the data disagree with the prior;
+  σ is at least :data:`PRIOR_SIGMA_SHARE` × the prior's σ and a per-feature floor; a
+  range is written back as [μ − σ, μ + σ];
+- one-sided ``{min: a}`` / ``{max: b}`` stay one-sided and plateaus
+  ``{min: a, max: b, soft: s}`` stay plateaus: the data's estimate of an end is the
+  extreme value (or the :data:`ONE_SIDED_QUANTILE` quantile) pushed outwards by the
+  expected gap between the extreme of ``n`` samples and the end of their support,
+  ``range / (n − 1)``, and blended with the prior's end by the same ``w``. An end thus
+  never moves inside what the samples support; ``soft`` (where the file has it) blends
+  the prior's softness with the sample spread, with the same floors.
 
 Constraints with fewer than :data:`MIN_SAMPLES` values, or with values from fewer than
 :data:`MIN_ROOMS` rooms (rescans of a room measure the same objects again), keep their
-prior. The YAML
-keeps its structure (same classes, parts, relations and keys; only numbers change);
-comments are not kept.
+prior.
+
+A fitted change is only kept where it does not hurt detection on rooms it was not fitted
+on, judged inside the calibration rooms alone (:func:`select_groups`): constraints are
+grouped by class and part (or relation, or cluster rules); each calibration room in turn
+is detected on with an ontology fitted on the other calibration rooms, and, group by
+group in file order, a group's change is accepted only if the F1 pooled over these
+validation rooms of no reported class, nor overall, falls below that of the changes
+accepted so far. The held-out rooms are never looked at.
+
+The YAML keeps its structure (same classes, parts, relations and keys; only numbers
+change); comments are not kept.
 
 Scenes are split by :func:`split_scenes` into a calibration and a held-out set by room,
 so rescans of one room never sit on both sides; the held-out scenes are only used to
@@ -29,12 +47,13 @@ compare detection before and after.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import functools
 import math
 import os
 import textwrap
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -43,6 +62,7 @@ from typing import Any
 import numpy as np
 import yaml
 
+from .._progress import progress
 from ..errors import InvalidParameterError, ReadError
 from ._dataset import (
     DatasetEvaluation,
@@ -62,13 +82,18 @@ __all__ = [
     "CalibrationResult",
     "ConstraintFit",
     "FitSettings",
+    "GroupDecision",
     "SceneSamples",
     "SceneSplit",
+    "ValidationScene",
     "calibrate_dataset",
     "calibrate_ontology",
     "collect_scene_samples",
+    "constraint_group",
     "constraint_values",
+    "fit_constraints",
     "fit_gaussian",
+    "select_groups",
     "split_scenes",
 ]
 
@@ -83,6 +108,15 @@ MIN_ROOMS = 2
 #: σ shrink so far that objects of other rooms failed several constraints at once (every
 #: factor multiplies); half kept recall.
 PRIOR_SIGMA_SHARE = 0.5
+#: Weight of the ontology's own value, in objects (κ0 = ν0 of the conjugate normal prior):
+#: the rules were written for every chair, a few dozen measured chairs of a handful of
+#: rooms should move them only part of the way.
+PRIOR_STRENGTH = 8.0
+#: The objects of one room count as at most this many independent samples: a room's
+#: chairs are often copies of one model, seen under the same sensor noise.
+ROOM_SAMPLES = 3
+#: A validation F1 "does not fall" when it is lower by at most this (float noise).
+F1_TOLERANCE = 1e-9
 #: ...nor below these absolute floors (units of the feature: m, degrees, m², ratios).
 ABS_SIGMA_FLOOR: dict[str, float] = {
     "tilt": 1.0,
@@ -268,6 +302,33 @@ def constraint_values(cls: Any, score: Any) -> dict[ConstraintPath, float]:
 
 
 @dataclass(frozen=True)
+class ValidationScene:
+    """What re-detecting a calibration scene with another ontology needs.
+
+    Segmentation does not depend on the ontology, so a scene is segmented once and its
+    clusters are scored and labelled again for every candidate ontology.
+
+    Attributes
+    ----------
+    name : str
+    descriptions : tuple of ClusterDescription
+        One per cluster.
+    centers : (k, 3) float
+        Cluster box centres (for the labelling's context term).
+    members : tuple of (m,) int arrays
+        Each cluster's points as rows of the input file.
+    gts : tuple of Instance
+        Ground truth of the reported classes, as rows of the input file.
+    """
+
+    name: str
+    descriptions: tuple[Any, ...]
+    centers: np.ndarray
+    members: tuple[np.ndarray, ...]
+    gts: tuple[Instance, ...]
+
+
+@dataclass(frozen=True)
 class SceneSamples:
     """Constraint values measured in one calibration scene.
 
@@ -280,6 +341,8 @@ class SceneSamples:
         Objects per class that gave values, and that had no cluster with point IoU
         >= :data:`MIN_CLUSTER_IOU`.
     error : str or None
+    scene : ValidationScene or None
+        The scene's clusters and ground truth, when asked for (``keep_clusters``).
     """
 
     name: str
@@ -287,6 +350,7 @@ class SceneSamples:
     used: dict[str, int] = field(default_factory=dict)
     skipped: dict[str, int] = field(default_factory=dict)
     error: str | None = None
+    scene: ValidationScene | None = None
 
 
 def collect_scene_samples(
@@ -296,6 +360,7 @@ def collect_scene_samples(
     class_ids: Mapping[int, str] | None = None,
     segment_options: Mapping[str, Any] | None = None,
     min_iou: float = MIN_CLUSTER_IOU,
+    keep_clusters: bool = False,
 ) -> SceneSamples:
     """Measure every constraint on the ground-truth objects of one scene.
 
@@ -311,6 +376,9 @@ def collect_scene_samples(
         ``config``, ``seed``, ``up``, ``scale`` of :func:`ontodetect.segment.segment`.
     min_iou : float
         Least point IoU between an object and its cluster.
+    keep_clusters : bool
+        Also return the clusters and the reported classes' ground truth
+        (:class:`ValidationScene`) for the nested check of :func:`select_groups`.
     """
     from ..errors import OntoDetectError
     from ..ontology import score_class
@@ -322,7 +390,7 @@ def collect_scene_samples(
     try:
         cloud = read_scene_cloud(source)
         gts = instances_from_labels(cloud.fields["instance"], cloud.fields["class_id"], ids)
-        if not gts:
+        if not gts and not keep_clusters:
             return SceneSamples(source.name)
         seg = segment(
             cloud,
@@ -338,52 +406,94 @@ def collect_scene_samples(
     values: dict[ConstraintPath, list[float]] = {}
     used: dict[str, int] = {}
     skipped: dict[str, int] = {}
+    descriptions = [describe_cluster(c) for c in seg]
     for g, gt in enumerate(gts):
         if not clusters or iou[:, g].max() < min_iou:
             skipped[gt.label] = skipped.get(gt.label, 0) + 1
             continue
         k = int(np.argmax(iou[:, g]))
         cls = ontology[gt.label]
-        score = score_class(cls, describe_cluster(seg[k]))
+        score = score_class(cls, descriptions[k])
         for path, v in constraint_values(cls, score).items():
             values.setdefault(path, []).append(v)
         used[gt.label] = used.get(gt.label, 0) + 1
-    return SceneSamples(source.name, values, used, skipped)
+    scene = None
+    if keep_clusters:
+        # The same ground truth and point rows as evaluate_scene uses for detections.
+        reported = _class_ids(ontology, reported_only=True, attr="label")
+        eval_gts = instances_from_labels(
+            cloud.fields["instance"],
+            cloud.fields["class_id"],
+            reported,
+            xyz=cloud.xyz,
+            index=cloud.index,
+        )
+        centers = np.array([c.box.center for c in seg]) if len(seg) else np.zeros((0, 3))
+        scene = ValidationScene(
+            source.name,
+            tuple(descriptions),
+            np.asarray(centers, dtype=np.float64),
+            tuple(np.sort(cloud.index[c.point_indices]) for c in seg),
+            tuple(eval_gts),
+        )
+    return SceneSamples(source.name, values, used, skipped, scene=scene)
 
 
 # -- fitting -------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class FitSettings:
-    """How constraints are re-estimated (see the module docstring).
+    """How constraints are re-estimated and checked (see the module docstring).
 
     Attributes
     ----------
     prior_share : float
         σ is at least this share of the prior's σ (:data:`PRIOR_SIGMA_SHARE`).
     quantile : float
-        One-sided bounds and plateau ends move to this quantile of the values (and
+        One-sided bounds and plateau ends start from this quantile of the values (and
         1 − it); 0 is the smallest (largest) value (:data:`ONE_SIDED_QUANTILE`).
     min_samples : int
         Fewer values keep the prior (:data:`MIN_SAMPLES`).
     min_rooms : int
         Values from fewer rooms keep the prior (:data:`MIN_ROOMS`): rescans of one
         room measure the same objects again, so they say little about other rooms.
+    prior_strength : float
+        Weight of the prior, in objects (:data:`PRIOR_STRENGTH`); 0 is the plain
+        maximum-likelihood fit.
+    room_samples : int
+        The objects of one room count as at most this many samples (:data:`ROOM_SAMPLES`).
+    validate : bool
+        Keep a fitted group of constraints only where the nested check inside the
+        calibration rooms (:func:`select_groups`) finds that it does not lower F1.
+    accept_ties : bool
+        Also keep a group that changes no validation F1 (by default a change needs
+        some evidence: it must raise one F1 and lower none).
     """
 
     prior_share: float = PRIOR_SIGMA_SHARE
     quantile: float = ONE_SIDED_QUANTILE
     min_samples: int = MIN_SAMPLES
     min_rooms: int = MIN_ROOMS
+    prior_strength: float = PRIOR_STRENGTH
+    room_samples: int = ROOM_SAMPLES
+    validate: bool = True
+    accept_ties: bool = False
 
     def __post_init__(self) -> None:
-        if not (isinstance(self.prior_share, (int, float)) and self.prior_share >= 0.0):
-            raise InvalidParameterError("prior_share", "a number >= 0", self.prior_share)
+        for name in ("prior_share", "prior_strength"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not (
+                isinstance(value, (int, float)) and math.isfinite(value) and value >= 0.0
+            ):
+                raise InvalidParameterError(name, "a finite number >= 0", value)
         if not (isinstance(self.quantile, (int, float)) and 0.0 <= self.quantile < 0.5):
             raise InvalidParameterError("quantile", "a number in [0, 0.5)", self.quantile)
-        for name in ("min_samples", "min_rooms"):
+        for name in ("min_samples", "min_rooms", "room_samples"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise InvalidParameterError(name, "a positive integer", value)
+        for name in ("validate", "accept_ties"):
+            if not isinstance(getattr(self, name), bool):
+                raise InvalidParameterError(name, "True or False", getattr(self, name))
 
 
 def sigma_floor(prior: Any, feature: str, prior_share: float = PRIOR_SIGMA_SHARE) -> float:
@@ -399,8 +509,10 @@ def fit_gaussian(
     prior_share: float = PRIOR_SIGMA_SHARE,
     quantile: float = ONE_SIDED_QUANTILE,
     min_samples: int = MIN_SAMPLES,
+    prior_strength: float = PRIOR_STRENGTH,
+    effective_samples: float | None = None,
 ) -> Any:
-    """Maximum-likelihood re-estimate of one constraint, with floors; keeps its side.
+    """Posterior re-estimate of one constraint, shrunk to the prior, with floors; keeps its side.
 
     Parameters
     ----------
@@ -413,9 +525,15 @@ def fit_gaussian(
     prior_share : float
         σ is at least this share of the prior's σ.
     quantile : float
-        Where one-sided bounds and plateau ends move (0: the extreme value).
+        Where the data's estimate of one-sided bounds and plateau ends starts (0: the
+        extreme value).
     min_samples : int
         Fewer finite values keep the prior.
+    prior_strength : float
+        κ0, the prior's weight in objects; 0 gives the maximum-likelihood fit.
+    effective_samples : float, optional
+        How many independent samples the values are worth (at most their number);
+        all of them by default.
 
     Returns
     -------
@@ -425,12 +543,19 @@ def fit_gaussian(
     Examples
     --------
     >>> from ontodetect.ontology import Gaussian
-    >>> g = fit_gaussian(Gaussian(0.55, 0.2), [0.44, 0.46, 0.48], "height", prior_share=0.25)
-    >>> round(g.mean, 3), round(g.sigma, 3)   # std 0.016 is below 25 % of 0.2
-    (0.46, 0.05)
-    >>> g = fit_gaussian(Gaussian(0.45, 0.2, "min"), [0.7, 0.8, 0.9], "fill", quantile=0.0)
-    >>> g.side, round(g.mean, 2)              # stays one-sided; the bound moves
-    ('min', 0.7)
+    >>> prior = Gaussian(0.55, 0.2)
+    >>> g = fit_gaussian(prior, [0.44, 0.46, 0.48], "height", prior_strength=0)
+    >>> round(g.mean, 3), round(g.sigma, 3)   # ML; the std 0.016 is below half of 0.2
+    (0.46, 0.1)
+    >>> g = fit_gaussian(prior, [0.44, 0.46, 0.48], "height", prior_strength=9)
+    >>> round(g.mean, 3), round(g.sigma, 3)   # 3 objects against 9: a quarter of the way
+    (0.528, 0.185)
+    >>> g = fit_gaussian(Gaussian(0.45, 0.2, "min"), [0.3, 0.4, 0.5], "fill", prior_strength=0)
+    >>> g.side, round(g.mean, 2)              # stays one-sided; 0.3 minus the expected gap
+    ('min', 0.2)
+    >>> g = fit_gaussian(Gaussian(0.45, 0.2, "min"), [0.7, 0.8, 0.9], "fill", prior_strength=0)
+    >>> round(g.mean, 2)                      # objects inside a bound never tighten it
+    0.45
     """
     from ..ontology import Gaussian
 
@@ -438,41 +563,71 @@ def fit_gaussian(
     x = x[np.isfinite(x)]
     if len(x) < max(min_samples, 1):
         return prior
+    n = float(len(x)) if effective_samples is None else min(float(len(x)), effective_samples)
+    # Share of the data in the conjugate posterior (κ0 = ν0 = prior_strength).
+    w = n / (prior_strength + n) if prior_strength + n > 0 else 1.0
     floor = sigma_floor(prior, feature, prior_share)
-    sigma = max(float(x.std()), floor)
+    spread = float(x.var())
+    # The posterior predictive of a new object is wider than the posterior by
+    # 1 + 1 / κn: with few objects σ widens rather than narrows.
+    predictive = 1.0 + 1.0 / max(prior_strength + n, 1.0)
+    if prior.side == "both":
+        shift = float(x.mean()) - prior.mean
+        var = (1.0 - w) * prior.sigma**2 + w * spread + w * (1.0 - w) * shift**2
+        return Gaussian(prior.mean + w * shift, max(math.sqrt(var * predictive), floor))
+    if prior.side not in ("min", "max", "plateau"):
+        return prior  # a form this version does not know how to fit
+    sigma = max(math.sqrt(((1.0 - w) * prior.sigma**2 + w * spread) * predictive), floor)
     low = float(np.quantile(x, quantile))
     high = float(np.quantile(x, 1.0 - quantile))
+    # The support of n samples reaches beyond their extremes by about range / (n - 1)
+    # (the unbiased end points of a uniform law): an end never moves inside it.
+    gap = (high - low) / max(n - 1.0, 1.0)
+    # Objects beyond a bound show it is too tight; objects inside it do not show that
+    # others are not beyond it, so bounds only ever loosen.
+    low = min(prior.mean + w * (low - gap - prior.mean), prior.mean)
     if prior.side == "min":
         return Gaussian(low, sigma, "min")
+    upper = prior.mean if prior.side == "max" else prior.upper
+    high = max(upper + w * (high + gap - upper), upper)
     if prior.side == "max":
         return Gaussian(high, sigma, "max")
-    if prior.side == "plateau":
-        if high - low < floor:
-            # Values (nearly) all alike: a plateau as wide as the σ floor around them.
-            mid = (low + high) / 2
-            low, high = mid - floor / 2, mid + floor / 2
-        return Gaussian.plateau(low, high, sigma)
-    if prior.side == "both":
-        return Gaussian(float(x.mean()), sigma)
-    return prior  # a form this version does not know how to fit
+    if high - low < floor:
+        # Values (nearly) all alike: a plateau as wide as the σ floor around them.
+        mid = (low + high) / 2
+        low, high = mid - floor / 2, mid + floor / 2
+    return Gaussian.plateau(low, high, sigma)
 
 
 @dataclass(frozen=True)
 class ConstraintFit:
-    """One constraint before and after calibration."""
+    """One constraint before and after calibration.
+
+    Attributes
+    ----------
+    path : tuple
+        Place in the file (see :func:`constraint_values`).
+    before, after : Gaussian
+        The prior and what was written (the prior itself when unchanged).
+    samples : int
+        Values measured.
+    proposed : Gaussian or None
+        The fit before the nested check (``after`` when it was kept).
+    note : str
+        Why the constraint kept its prior, if it did.
+    """
 
     path: ConstraintPath
     before: Any
     after: Any
     samples: int
+    proposed: Any = None
+    note: str = ""
 
     @property
     def name(self) -> str:
         """Dotted place in the file: ``chair.parts.seat.height``, ``chair.relations[0].gap``."""
-        out = ""
-        for p in self.path:
-            out += f"[{p}]" if isinstance(p, int) else (f".{p}" if out else str(p))
-        return out
+        return _dotted(self.path)
 
     @property
     def changed(self) -> bool:
@@ -485,12 +640,39 @@ class ConstraintFit:
                 out["upper"] = x.upper
             return out
 
-        return {
+        out = {
             "constraint": self.name,
             "samples": self.samples,
             "before": g(self.before),
             "after": g(self.after),
         }
+        if self.proposed is not None and self.proposed is not self.after:
+            out["proposed"] = g(self.proposed)
+        if self.note:
+            out["note"] = self.note
+        return out
+
+
+def _dotted(path: Sequence[Any]) -> str:
+    out = ""
+    for p in path:
+        out += f"[{p}]" if isinstance(p, int) else (f".{p}" if out else str(p))
+    return out
+
+
+def constraint_group(path: ConstraintPath) -> ConstraintPath:
+    """The group a constraint is accepted or rejected with: its class and part.
+
+    ``(class, "parts", part)``, ``(class, "relations", index)`` or ``(class, "cluster")``.
+
+    Examples
+    --------
+    >>> constraint_group(("chair", "parts", "seat", "height"))
+    ('chair', 'parts', 'seat')
+    >>> constraint_group(("chair", "cluster", "length"))
+    ('chair', 'cluster')
+    """
+    return tuple(path[:2]) if path[1] == "cluster" else tuple(path[:3])
 
 
 def _round(v: float, digits: int = DIGITS) -> float:
@@ -592,6 +774,68 @@ def _constraint_paths(ontology: Any) -> list[tuple[ConstraintPath, Any]]:
     return out
 
 
+def _effective(
+    path: ConstraintPath, rooms: Mapping[ConstraintPath, int] | None, settings: FitSettings
+) -> float | None:
+    return None if rooms is None else float(rooms.get(path, 0) * settings.room_samples)
+
+
+def fit_constraints(
+    ontology: Any,
+    values: Mapping[ConstraintPath, Sequence[float]],
+    rooms: Mapping[ConstraintPath, int] | None = None,
+    settings: FitSettings | None = None,
+) -> dict[ConstraintPath, Any]:
+    """The re-estimated constraints of an ontology, before any check.
+
+    Parameters
+    ----------
+    ontology : Ontology
+    values : mapping
+        Constraint path -> measured values.
+    rooms : mapping, optional
+        Constraint path -> number of rooms its values come from (not checked when
+        omitted; each room's values then count in full).
+    settings : FitSettings, optional
+
+    Returns
+    -------
+    dict
+        Constraint path -> new Gaussian, for the constraints that changed.
+    """
+    settings = settings or FitSettings()
+    out = {}
+    for path, prior in _constraint_paths(ontology):
+        if rooms is not None and rooms.get(path, 0) < settings.min_rooms:
+            continue
+        after = fit_gaussian(
+            prior,
+            list(values.get(path, ())),
+            path[-1],
+            prior_share=settings.prior_share,
+            quantile=settings.quantile,
+            min_samples=settings.min_samples,
+            prior_strength=settings.prior_strength,
+            effective_samples=_effective(path, rooms, settings),
+        )
+        if after is not prior:
+            out[path] = after
+    return out
+
+
+def _render(data: Mapping[str, Any], fits: Mapping[ConstraintPath, Any], comment: str = "") -> str:
+    """The ontology YAML ``data`` with the constraints of ``fits`` rewritten in their form."""
+    data = copy.deepcopy(dict(data))
+    for path, g in fits.items():
+        container, key = _spec_at(data, path)
+        container[key] = _write_spec(container[key], g)
+    body = yaml.dump(data, Dumper=_Dumper, sort_keys=False, allow_unicode=True, width=LINE_WIDTH)
+    lines = [
+        w for line in comment.splitlines() for w in (textwrap.wrap(line, LINE_WIDTH - 2) or [""])
+    ]
+    return "".join(f"# {line}\n" if line else "#\n" for line in lines) + body
+
+
 def calibrate_ontology(
     text: str,
     values: Mapping[ConstraintPath, Sequence[float]],
@@ -600,6 +844,7 @@ def calibrate_ontology(
     settings: FitSettings | None = None,
     source: str | None = None,
     comment: str | None = None,
+    groups: Collection[ConstraintPath] | None = None,
 ) -> tuple[str, list[ConstraintFit]]:
     """Re-estimate an ontology file's constraints from measured values.
 
@@ -611,13 +856,18 @@ def calibrate_ontology(
         Constraint path (see :func:`constraint_values`) -> measured values.
     rooms : mapping, optional
         Constraint path -> number of rooms its values come from; constraints measured
-        in fewer than ``settings.min_rooms`` keep their prior. Not checked when omitted.
+        in fewer than ``settings.min_rooms`` keep their prior, and a room's values
+        count as at most ``settings.room_samples`` samples. Not checked when omitted.
     settings : FitSettings, optional
-        Floors, quantile and minimum counts (defaults: the module constants).
+        Floors, quantile, prior strength and minimum counts (defaults: the module
+        constants). ``settings.validate`` is not used here (see :func:`select_groups`).
     source : str, optional
         Name of the file, for error messages.
     comment : str, optional
         Written as ``#`` lines at the top of the new file.
+    groups : collection of group paths, optional
+        Only constraints of these groups (:func:`constraint_group`) change; all by
+        default.
 
     Returns
     -------
@@ -632,33 +882,250 @@ def calibrate_ontology(
     ontology = parse_ontology(text, source)
     data = yaml.safe_load(text)
     settings = settings or FitSettings()
+    proposed = fit_constraints(ontology, values, rooms, settings)
+    kept = {p: g for p, g in proposed.items() if groups is None or constraint_group(p) in groups}
     fits = []
     for path, prior in _constraint_paths(ontology):
-        vals = list(values.get(path, ()))
-        after = prior
-        if rooms is None or rooms.get(path, 0) >= settings.min_rooms:
-            after = fit_gaussian(
+        note = ""
+        if path not in proposed:
+            if rooms is not None and rooms.get(path, 0) < settings.min_rooms:
+                note = f"measured in fewer than {settings.min_rooms} rooms"
+            elif len(values.get(path, ())) < settings.min_samples:
+                note = f"fewer than {settings.min_samples} values"
+        elif path not in kept:
+            note = "its group was not accepted by the nested check"
+        fits.append(
+            ConstraintFit(
+                path,
                 prior,
-                vals,
-                path[-1],
-                prior_share=settings.prior_share,
-                quantile=settings.quantile,
-                min_samples=settings.min_samples,
+                kept.get(path, prior),
+                len(values.get(path, ())),
+                proposed.get(path),
+                note,
             )
-        fits.append(ConstraintFit(path, prior, after, len(vals)))
-        if after is not prior:
-            container, key = _spec_at(data, path)
-            container[key] = _write_spec(container[key], after)
-    body = yaml.dump(data, Dumper=_Dumper, sort_keys=False, allow_unicode=True, width=LINE_WIDTH)
-    lines = [
-        w
-        for line in (comment or "").splitlines()
-        for w in (textwrap.wrap(line, LINE_WIDTH - 2) or [""])
-    ]
-    head = "".join(f"# {line}\n" if line else "#\n" for line in lines)
-    new_text = head + body
+        )
+    new_text = _render(data, kept, comment or "")
     parse_ontology(new_text, source)  # the result must be a valid ontology
     return new_text, fits
+
+
+# -- the nested check ----------------------------------------------------------------------
+@dataclass(frozen=True)
+class GroupDecision:
+    """Whether one group of fitted constraints passed the nested check.
+
+    Attributes
+    ----------
+    group : tuple
+        :func:`constraint_group` path.
+    accepted : bool
+    f1_before, f1_after : dict of str to float
+        Validation F1 per reported class and ``"overall"`` without and with the group
+        (on top of the groups accepted before it), pooled over the validation rooms.
+    """
+
+    group: ConstraintPath
+    accepted: bool
+    f1_before: dict[str, float]
+    f1_after: dict[str, float]
+
+    @property
+    def name(self) -> str:
+        return _dotted(self.group)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "group": self.name,
+            "accepted": self.accepted,
+            "f1_before": self.f1_before,
+            "f1_after": self.f1_after,
+        }
+
+
+def _f1(tp: int, fp: int, fn: int) -> float:
+    return 2 * tp / (2 * tp + fp + fn) if tp else 0.0
+
+
+def _detect_counts(
+    scene: ValidationScene,
+    ontology: Any,
+    params: Mapping[str, Any],
+    classes: Sequence[str],
+) -> dict[str, np.ndarray]:
+    """TP, FP, FN per class of detecting ``scene``'s clusters with ``ontology``."""
+    from ..labeling import label_clusters
+    from ..ontology import score_cluster
+    from ._match import match_instances
+
+    scores = [
+        score_cluster(d, ontology, params["priors"], none_likelihood=params["none_likelihood"])
+        for d in scene.descriptions
+    ]
+    choices = label_clusters(
+        scores,
+        [d.planes for d in scene.descriptions],
+        ontology,
+        beta=params["beta"],
+        threshold=params["threshold"],
+        centers=scene.centers,
+        context=params["context"],
+    )
+    preds = [
+        Instance.make(
+            k,
+            ch.label,
+            scene.members[k],
+            float(s.probabilities[ch.extra["class"]]),
+            scene.centers[k],
+        )
+        for k, (s, ch) in enumerate(zip(scores, choices))
+        if ch.label is not None and ch.label in classes
+    ]
+    gts = [g for g in scene.gts if g.label in classes]
+    m = match_instances(preds, gts, iou_threshold=MIN_CLUSTER_IOU)
+    out = {}
+    for c in classes:
+        hit = [m.pred_match[i] >= 0 for i, p in enumerate(preds) if p.label == c]
+        n_gt = sum(g.label == c for g in gts)
+        tp = int(sum(hit))
+        out[c] = np.array([tp, len(hit) - tp, n_gt - tp])
+    return out
+
+
+def _detection_params(ontology: Any, detect_options: Mapping[str, Any]) -> dict[str, Any]:
+    """The scoring and labelling settings :func:`ontodetect.pipeline.detect` would use."""
+    from ..config import Config
+    from ..ontology import class_priors
+
+    opts = dict(detect_options)
+    d = (opts.get("config") or Config()).detect
+    params = {
+        k: d.__getattribute__(k) if opts.get(k) is None else opts[k]
+        for k in ("threshold", "beta", "none_likelihood", "context")
+    }
+    params["priors"] = class_priors(ontology, opts.get("room"), opts.get("indoor"))
+    return params
+
+
+def select_groups(
+    text: str,
+    room_values: Mapping[str, Mapping[ConstraintPath, Sequence[float]]],
+    scenes: Mapping[str, Sequence[ValidationScene]],
+    *,
+    settings: FitSettings | None = None,
+    detect_options: Mapping[str, Any] | None = None,
+    source: str | None = None,
+) -> tuple[set[ConstraintPath], list[GroupDecision]]:
+    """Which groups of fitted constraints do not lower F1 on calibration rooms left out.
+
+    Every calibration room in turn is a validation room: the constraints are fitted
+    (:func:`fit_constraints`) on the values of the other rooms, and its scenes are
+    detected on again with the base ontology changed by a set of groups. Starting from
+    no change, the groups that any fold changes are tried one by one in file order on
+    top of those accepted so far; a group is accepted when neither any reported class's
+    F1 nor the overall F1, pooled over all validation rooms, falls.
+
+    Parameters
+    ----------
+    text : str
+        The base ontology's YAML.
+    room_values : mapping of str to mapping
+        Room -> constraint path -> values measured in that room's scenes.
+    scenes : mapping of str to sequence of ValidationScene
+        Room -> its scenes' clusters and ground truth (rooms without scenes are not
+        validated on but still give values).
+    settings : FitSettings, optional
+    detect_options : mapping, optional
+        ``config``, ``room``, ``indoor``, ``threshold``, ``beta``, ``none_likelihood``,
+        ``context`` of :func:`ontodetect.pipeline.detect`.
+    source : str, optional
+        Name of the ontology file, for error messages.
+
+    Returns
+    -------
+    accepted : set of group paths
+    decisions : list of GroupDecision
+        One per group tried, in order. Empty when fewer than two rooms were measured
+        (nothing can be checked, so nothing is accepted).
+    """
+    from ..ontology import parse_ontology
+
+    settings = settings or FitSettings()
+    base = parse_ontology(text, source)
+    data = yaml.safe_load(text)
+    classes = [c.label for c in base.classes if c.detect]
+    classes = list(dict.fromkeys(classes))
+    params = _detection_params(base, detect_options or {})
+    rooms = sorted(room_values, key=_natural_key)
+    folds = []
+    for held in rooms:
+        if len(rooms) < 2 or not scenes.get(held):
+            continue
+        values: dict[ConstraintPath, list[float]] = {}
+        counts: dict[ConstraintPath, int] = {}
+        for r in rooms:
+            if r == held:
+                continue
+            for p, v in room_values[r].items():
+                values.setdefault(p, []).extend(v)
+                counts[p] = counts.get(p, 0) + 1
+        folds.append((list(scenes[held]), fit_constraints(base, values, counts, settings)))
+    order = {
+        g: i
+        for i, g in enumerate(
+            dict.fromkeys(constraint_group(p) for p, _ in _constraint_paths(base))
+        )
+    }
+    candidates = sorted({constraint_group(p) for _, fits in folds for p in fits}, key=order.get)
+
+    def evaluate(chosen: set[ConstraintPath]) -> tuple[dict[str, float], list[dict[str, float]]]:
+        """F1 pooled over the validation rooms, and F1 in each of them."""
+        total = {c: np.zeros(3, dtype=np.int64) for c in classes}
+        per_fold = []
+        for fold_scenes, fits in folds:
+            used = {p: g for p, g in fits.items() if constraint_group(p) in chosen}
+            onto = parse_ontology(_render(data, used), source) if used else base
+            fold = {c: np.zeros(3, dtype=np.int64) for c in classes}
+            for scene in fold_scenes:
+                for c, v in _detect_counts(scene, onto, params, classes).items():
+                    fold[c] += v
+            for c in classes:
+                total[c] += fold[c]
+            per_fold.append(
+                {
+                    **{c: _f1(*map(int, v)) for c, v in fold.items()},
+                    # Objects found: the held-out rooms lost recall, not precision.
+                    **{f"{c} found": float(v[0]) for c, v in fold.items()},
+                }
+            )
+        f1 = {c: _f1(*map(int, v)) for c, v in total.items()}
+        f1["overall"] = _f1(*map(int, sum(total.values())))
+        return f1, per_fold
+
+    def no_worse(new: Mapping[str, float], old: Mapping[str, float]) -> bool:
+        return all(new[k] >= old[k] - F1_TOLERANCE for k in old)
+
+    accepted: set[ConstraintPath] = set()
+    decisions = []
+    if not folds:
+        return accepted, decisions
+    current, current_folds = evaluate(accepted)
+    with progress("Checking calibrated groups", total=len(candidates)) as advance:
+        for group in candidates:
+            trial, trial_folds = evaluate(accepted | {group})
+            # Pooled and room by room: a change that helps one room and hurts another
+            # depends on the rooms, not on the class.
+            ok = no_worse(trial, current) and all(
+                no_worse(t, c) for t, c in zip(trial_folds, current_folds)
+            )
+            if ok and not settings.accept_ties:
+                ok = any(trial[k] > current[k] + F1_TOLERANCE for k in current)
+            decisions.append(GroupDecision(group, ok, current, trial))
+            if ok:
+                accepted.add(group)
+                current, current_folds = trial, trial_folds
+            advance(1)
+    return accepted, decisions
 
 
 # -- the whole procedure -------------------------------------------------------------------
@@ -683,6 +1150,9 @@ class CalibrationResult:
     failed : list of str
         Calibration scenes that could not be read, with the reason.
     settings : FitSettings
+    decisions : list of GroupDecision
+        The nested check of every group of fitted constraints, in order (empty when
+        ``settings.validate`` is off or fewer than two rooms were measured).
     """
 
     text: str
@@ -696,9 +1166,10 @@ class CalibrationResult:
     after: DatasetEvaluation | None = None
     failed: list[str] = field(default_factory=list)
     settings: FitSettings = field(default_factory=FitSettings)
+    decisions: list[GroupDecision] = field(default_factory=list)
 
     def comparison(self) -> list[dict[str, Any]]:
-        """Per class and overall: precision and recall on the held-out scenes, before/after."""
+        """Per class and overall: precision, recall and F1 on the held-out scenes, before/after."""
         if self.before is None or self.after is None:
             return []
         rows = []
@@ -714,6 +1185,8 @@ class CalibrationResult:
                     "recall_before": mb.recall,
                     "precision_after": ma.precision,
                     "recall_after": ma.recall,
+                    "f1_before": mb.f1,
+                    "f1_after": ma.f1,
                     "detections_before": mb.num_pred,
                     "detections_after": ma.num_pred,
                 }
@@ -728,6 +1201,7 @@ class CalibrationResult:
             "skipped": self.skipped,
             "failed": self.failed,
             "constraints": [f.to_dict() for f in self.fits],
+            "nested_check": [d.to_dict() for d in self.decisions],
             "held_out": self.comparison(),
             "criterion": "point IoU >= 0.25",
         }
@@ -808,13 +1282,20 @@ def calibrate_dataset(
     units = list(scenes) if scenes is not None else discover_scenes(path, format)
     parts = split_scenes(units, split, seed)
 
+    settings = settings or FitSettings()
     seg_opts = {k: opts[k] for k in ("config", "seed", "up", "scale") if k in opts}
     work = functools.partial(
-        collect_scene_samples, ontology=base_onto, segment_options=seg_opts, min_iou=min_iou
+        collect_scene_samples,
+        ontology=base_onto,
+        segment_options=seg_opts,
+        min_iou=min_iou,
+        keep_clusters=settings.validate,
     )
     samples = map_scenes(work, parts.calibration, jobs=jobs, description="Measuring objects")
     values: dict[ConstraintPath, list[float]] = {}
     rooms: dict[ConstraintPath, set[str]] = {}
+    room_values: dict[str, dict[ConstraintPath, list[float]]] = {}
+    room_scenes: dict[str, list[ValidationScene]] = {}
     used: dict[str, int] = {}
     skipped: dict[str, int] = {}
     failed = []
@@ -823,22 +1304,44 @@ def calibrate_dataset(
         if s.error is not None:
             failed.append(f"{s.name}: {s.error}")
             continue
+        per_room = room_values.setdefault(unit.group, {})
         for p, v in s.values.items():
             values.setdefault(p, []).extend(v)
+            per_room.setdefault(p, []).extend(v)
             rooms.setdefault(p, set()).add(unit.group)
+        if s.scene is not None:
+            room_scenes.setdefault(unit.group, []).append(s.scene)
         for d, src in ((used, s.used), (skipped, s.skipped)):
             for k, n in src.items():
                 d[k] = d.get(k, 0) + n
-    settings = settings or FitSettings()
+    groups: set[ConstraintPath] | None = None
+    decisions: list[GroupDecision] = []
+    if settings.validate:
+        groups, decisions = select_groups(
+            text,
+            room_values,
+            room_scenes,
+            settings=settings,
+            detect_options=opts,
+            source=source,
+        )
     name = Path(path).name or str(path)
     counts = ", ".join(f"{n} {c}" for c, n in sorted(used.items())) or "none"
+    check = (
+        f"kept {len(groups)} of {len(decisions)} groups of constraints that did not lower F1 "
+        "on calibration rooms left out in turn"
+        if groups is not None
+        else "no nested check"
+    )
     comment = (
         f"Calibrated by 'ontodetect calibrate' from {source} on {name}:\n"
         f"{sum(used.values())} objects ({counts}) in {len(parts.calibration)} scenes;\n"
         f"{parts.describe()}.\n"
-        f"sigma >= {settings.prior_share:g} x the original, bounds at quantile "
+        f"Shrunk to the original with a weight of {settings.prior_strength:g} objects, "
+        f"a room counting as at most {settings.room_samples} objects; "
+        f"sigma >= {settings.prior_share:g} x the original, bounds from quantile "
         f"{settings.quantile:g}, at least {settings.min_samples} values from "
-        f"{settings.min_rooms} rooms.\n"
+        f"{settings.min_rooms} rooms; {check}.\n"
         "Only numbers changed; the comments of the original file are not kept."
     )
     new_text, fits = calibrate_ontology(
@@ -848,6 +1351,7 @@ def calibrate_dataset(
         settings=settings,
         source=source,
         comment=comment,
+        groups=groups,
     )
     new_onto = parse_ontology(new_text, source)
     before = after = None
@@ -867,5 +1371,16 @@ def calibrate_dataset(
             on_error="skip",
         )
     return CalibrationResult(
-        new_text, new_onto, base_onto, parts, fits, used, skipped, before, after, failed, settings
+        new_text,
+        new_onto,
+        base_onto,
+        parts,
+        fits,
+        used,
+        skipped,
+        before,
+        after,
+        failed,
+        settings,
+        decisions,
     )
