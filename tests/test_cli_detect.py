@@ -88,3 +88,18 @@ def test_detect_bad_parameters_exit_2_with_one_line(scene, tmp_path, capsys, arg
 def test_detect_missing_input(tmp_path, capsys):
     assert main(["detect", str(tmp_path / "nope.ply"), "-o", str(tmp_path / "o")]) == 2
     assert "nope.ply: no such file" in capsys.readouterr().err
+
+
+def test_detect_with_cad_adds_poses_and_the_object_map(scene, tmp_path):
+    out = tmp_path / "cad"
+    assert main(["-q", "detect", str(scene / "cloud.ply"), "-o", str(out), "--cad",
+                 "--no-picture"]) == 0
+    doc = json.loads((out / "detections.json").read_text())
+    assert doc["detections"]
+    for d in doc["detections"]:
+        pose = np.asarray(d["cad"]["pose"])
+        assert pose.shape == (4, 4)
+        # upright: the model's z axis stays the world's z axis
+        assert np.allclose(pose[:3, 2], [0, 0, 1], atol=1e-6)
+        assert d["cad"]["rms"] >= 0
+    assert (out / "object_map.ply").exists() and (out / "object_map.glb").exists()

@@ -33,7 +33,7 @@ from .ontology import (
 )
 from .segment import Cluster, Segmentation, segment
 
-__all__ = ["Detection", "Result", "describe_cluster", "detect"]
+__all__ = ["Detection", "Result", "describe_cluster", "detect", "with_cad"]
 
 #: Format tag of detections.json.
 DETECTIONS_FORMAT = "ontodetect.detections/1"
@@ -163,6 +163,20 @@ class Result:
     @property
     def class_names(self) -> list[str]:
         return sorted({c.label for c in self.ontology.classes})
+
+
+def with_cad(result: Result, fits: Sequence[Any]) -> Result:
+    """The result with each detection's ``cad`` entry filled from its CAD fit (same order)."""
+    import dataclasses
+
+    from .cad import cad_dict
+
+    if len(fits) != len(result.detections):
+        raise InvalidParameterError("fits", f"one fit per detection ({len(result.detections)})",
+                                    len(fits))
+    detections = [dataclasses.replace(d, cad=cad_dict(f))
+                  for d, f in zip(result.detections, fits)]
+    return dataclasses.replace(result, detections=detections)
 
 
 def describe_cluster(cluster: Cluster) -> ClusterDescription:

@@ -45,6 +45,8 @@ def detect(
     explain_: bool = typer.Option(False, "--explain",
                                   help="Print every constraint's probability and the label costs."),
     picture: bool = typer.Option(True, "--picture/--no-picture", help="Write detections.png."),
+    cad: bool = typer.Option(False, "--cad", help="Fit generic CAD models; write the object map "
+                             "(object_map.ply, object_map.glb) and add 'cad' to detections.json."),
 ) -> None:
     """Detect objects; write detections.json, labelled.ply and detections.png."""
     cfg = load_config(config, set_)
@@ -55,7 +57,16 @@ def detect(
         result = run_detect(cloud, config=cfg, ontology=onto, room=room_arg, indoor=indoor,
                             threshold=threshold, beta=beta, context=context, seed=seed, up=up,
                             scale=scale)
+        object_map = None
+        if cad:
+            from ..cad import fit_detections, write_object_map
+            from ..pipeline import with_cad
+
+            fits = fit_detections(result, seed=seed)
+            result = with_cad(result, fits)
         files = write_outputs(result, out, picture=picture)
+        if cad:
+            object_map = write_object_map(fits, out, seed=seed)
     if explain_:
         _print_explain(result)
     if state.quiet:
@@ -69,7 +80,8 @@ def detect(
                       " ".join(f"{v:.2f}" for v in d.center), " ".join(f"{v:.2f}" for v in d.size))
     console.print(table)
     console.print(f"wrote {files.detections}, {files.labelled}"
-                  + (f", {files.picture}" if files.picture else ""))
+                  + (f", {files.picture}" if files.picture else "")
+                  + (", object_map.ply, object_map.glb" if object_map is not None else ""))
     if state.verbose:
         console.print(json.dumps(result.to_dict()["timings"]))
 
