@@ -12,7 +12,9 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
+from .cad import fit_detections, write_object_map
 from .errors import InvalidParameterError
 from .evaluation import (
     Evaluation,
@@ -23,7 +25,7 @@ from .evaluation import (
 )
 from .ontology import room_distribution
 from .outputs import OutputFiles, write_outputs
-from .pipeline import Result, detect
+from .pipeline import Result, detect, with_cad
 from .synth import synthesize, write_synth
 
 __all__ = ["DEMO_ROOM", "DEMO_SEED", "DemoResult", "run_demo"]
@@ -42,14 +44,16 @@ class DemoResult:
     files: OutputFiles
     result: Result
     evaluation: Evaluation
+    object_map: Any = None
 
 
 def run_demo(out_dir: str | os.PathLike[str], *, room: str = DEMO_ROOM,
              seed: int = DEMO_SEED, sensor: str = "rgbd") -> DemoResult:
     """Simulate a scan, detect objects in it and evaluate them against the simulator's truth.
 
-    Writes ``OUT/scan/`` (the simulated scan in the project's dataset layout) and
-    ``OUT/detections.json``, ``OUT/labelled.ply``, ``OUT/detections.png``.
+    Writes ``OUT/scan/`` (the simulated scan in the project's dataset layout),
+    ``OUT/detections.json`` (with fitted CAD poses), ``OUT/labelled.ply``,
+    ``OUT/detections.png`` and the object map ``OUT/object_map.ply`` / ``.glb``.
     """
     out = Path(out_dir)
     synth = synthesize(room, sensor, seed)
@@ -61,10 +65,13 @@ def run_demo(out_dir: str | os.PathLike[str], *, room: str = DEMO_ROOM,
     except InvalidParameterError:
         prior_room = None
     result = detect(cloud, room=prior_room, seed=seed)
+    fits = fit_detections(result, seed=seed)
+    result = with_cad(result, fits)
+    object_map = write_object_map(fits, out, seed=seed)
     files = write_outputs(result, out, title=f"simulated {room} (seed {seed}): "
                                               f"{len(result.detections)} objects")
     gts = instances_from_labels(cloud.fields["instance"], cloud.fields["class_id"], _EVALUATED,
                                 index=cloud.index)
     preds = [Instance.make(d.id, d.label, d.point_indices, d.score) for d in result.detections]
     evaluation = evaluate_scenes([SceneResult(f"{room}-{seed}", preds, gts)])
-    return DemoResult(scan_dir, files, result, evaluation)
+    return DemoResult(scan_dir, files, result, evaluation, object_map)

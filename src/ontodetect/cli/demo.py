@@ -31,3 +31,4 @@ def demo(
     console.print("correct = point IoU >= 0.25 with a ground-truth object of the same class")
     console.print(f"scan:    {d.scan_dir}/cloud.ply (+ objects.json, scene.json)")
     console.print(f"results: {d.files.detections}, {d.files.labelled}, {d.files.picture}")
+    console.print(f"object map (generic CAD models): {out}/object_map.ply, {out}/object_map.glb")
