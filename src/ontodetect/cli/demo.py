@@ -25,6 +25,8 @@ def demo(
     for col in ("class", "truth", "detected", "correct", "precision", "recall"):
         table.add_column(col, justify="left" if col == "class" else "right")
     for name, m in d.evaluation.per_class.items():
+        if m.num_gt == 0 and m.num_pred == 0:
+            continue  # nothing of this class in the room, nothing claimed
         table.add_row(name, str(m.num_gt), str(m.num_pred), str(m.tp), f"{m.precision:.2f}",
                       f"{m.recall:.2f}")
     console.print(table)
