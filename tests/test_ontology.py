@@ -102,7 +102,7 @@ def test_stool_is_not_a_chair_and_table_is_not_a_chair():
 
 def test_chair_assignment_and_factors():
     s = score_class(builtin_ontology()["chair"], chair())
-    assert s.assignment == {"seat": 0, "backrest": 1}
+    assert s.assignment == {"seat": 0, "backrest": 1, "apron": None}
     # every factor of P_def is the product of its constraints' Gaussians
     seat = {c.feature: c for c in s.constraints if c.part == "seat"}
     g = builtin_ontology()["chair"].part("seat").constraints["height"]
