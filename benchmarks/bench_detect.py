@@ -4,9 +4,10 @@ Run as ``python -m benchmarks.bench_detect DATASET_DIR [--repeat 3]``: every
 ``*_vert.npy`` scene is read once, then timed end to end through
 ``ontodetect.pipeline.detect`` (preparation, part-driven clustering, MSAC planes,
 scoring, labelling) and through the obvious alternative on the same points:
-Open3D statistical outlier removal, DBSCAN (eps 5 cm, Table 4.1) and repeated
-``segment_plane`` per cluster — which finds clusters and planes but labels
-nothing. Medians of ``--repeat`` runs; the ratio is Open3D / ontodetect.
+Open3D statistical outlier removal, the 1.4 m cut-off, DBSCAN (eps 5 cm, Table
+4.1) and repeated ``segment_plane`` per cluster (``benchmarks/_open3d_recipe.py``)
+— which finds clusters and planes but labels nothing. Medians of ``--repeat``
+runs; the ratio is Open3D / ontodetect.
 """
 
 from __future__ import annotations
@@ -19,37 +20,18 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmarks import _open3d_recipe as o3d_recipe
 from ontodetect.io import read_cloud
 from ontodetect.pipeline import detect
 
-#: Open3D recipe parameters: Table 4.1's radius and inlier distance.
-O3D_EPS = 0.05
-O3D_MIN_POINTS = 10
-O3D_PLANE_DISTANCE = 0.01
-O3D_MIN_PLANE_POINTS = 30
-O3D_MAX_PLANES = 8
-
 
 def open3d_recipe(xyz: np.ndarray) -> int:
-    """Statistical outlier removal + DBSCAN + repeated RANSAC planes; returns the plane count."""
+    """The plain Open3D recipe on one cloud; returns the number of planes found."""
     import open3d as o3d
 
     pc = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(xyz))
-    pc, _ = pc.remove_statistical_outlier(nb_neighbors=20, std_ratio=2.0)
-    labels = np.asarray(pc.cluster_dbscan(eps=O3D_EPS, min_points=O3D_MIN_POINTS))
-    pts = np.asarray(pc.points)
-    planes = 0
-    for k in range(labels.max() + 1 if labels.size else 0):
-        rest = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(pts[labels == k]))
-        for _ in range(O3D_MAX_PLANES):
-            if len(rest.points) < O3D_MIN_PLANE_POINTS:
-                break
-            _, inliers = rest.segment_plane(O3D_PLANE_DISTANCE, 3, 200)
-            if len(inliers) < O3D_MIN_PLANE_POINTS:
-                break
-            planes += 1
-            rest = rest.select_by_index(inliers, invert=True)
-    return planes
+    pc, labels = o3d_recipe.cluster(pc)
+    return o3d_recipe.planes(pc, labels)
 
 
 def _median_time(fn, repeat: int) -> float:

@@ -42,6 +42,16 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmarks import _open3d_recipe as o3d_recipe
+from benchmarks._open3d_recipe import (
+    CUTOFF,
+    O3D_DBSCAN,
+    O3D_MAX_PLANES,
+    O3D_MIN_CLUSTER,
+    O3D_PLANE,
+    O3D_SOR,
+)
+
 SEED = 20161221
 #: Targets of the task: at most this long (s) at 1 million points, at least this many times
 #: faster than the Open3D recipe, and at most this much memory (MB) at 10 million points.
@@ -49,13 +59,6 @@ TARGET_SECONDS = 1.5
 TARGET_SPEEDUP = 3.0
 TARGET_MB = 2048
 #: Open3D recipe parameters (Table 4.1: DBSCAN radius 2-5 cm, inlier distance 1 cm).
-O3D_SOR = (20, 2.0)
-O3D_DBSCAN = (0.05, 10)
-O3D_PLANE = (0.01, 3, 1000)
-O3D_MAX_PLANES = 8
-O3D_MIN_CLUSTER = 100
-O3D_MIN_PLANE = 30
-CUTOFF = 1.4
 
 
 # -- scenes --------------------------------------------------------------------------------
@@ -159,26 +162,9 @@ def work_o3d(path: Path, repeat: int) -> dict:
     for _ in range(repeat):
         t0 = time.perf_counter()
         pc = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(xyz))
-        pc, _ = pc.remove_statistical_outlier(*O3D_SOR)
-        pts = np.asarray(pc.points)
-        pc = pc.select_by_index(np.flatnonzero(pts[:, 2] < CUTOFF))
-        labels = np.asarray(pc.cluster_dbscan(*O3D_DBSCAN))
+        pc, labels = o3d_recipe.cluster(pc)
         t1 = time.perf_counter()
-        planes = 0
-        pts = np.asarray(pc.points)
-        for k in range(int(labels.max()) + 1 if labels.size else 0):
-            idx = np.flatnonzero(labels == k)
-            if len(idx) < O3D_MIN_CLUSTER:
-                continue
-            rest = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(pts[idx]))
-            for _ in range(O3D_MAX_PLANES):
-                if len(rest.points) < O3D_MIN_PLANE:
-                    break
-                _, inl = rest.segment_plane(*O3D_PLANE)
-                if len(inl) < O3D_MIN_PLANE:
-                    break
-                planes += 1
-                rest = rest.select_by_index(inl, invert=True)
+        planes = o3d_recipe.planes(pc, labels)
         t2 = time.perf_counter()
         runs.append((t1 - t0, t2 - t1, t2 - t0, int(labels.max()) + 1, planes))
     best = min(runs, key=lambda r: r[2])

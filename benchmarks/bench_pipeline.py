@@ -47,6 +47,16 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmarks import _open3d_recipe as o3d_recipe
+from benchmarks._open3d_recipe import (
+    CUTOFF,
+    O3D_DBSCAN,
+    O3D_MAX_PLANES,
+    O3D_MIN_CLUSTER,
+    O3D_PLANE,
+    O3D_SOR,
+)
+
 SEED = 20161221
 #: Default sizes (points).
 SIZES = (100_000, 1_000_000, 10_000_000)
@@ -55,13 +65,6 @@ REPEAT_BELOW = 5_000_000
 #: Seconds between two samples of the resident set.
 RSS_INTERVAL = 0.005
 #: Open3D recipe, as in bench_geometry (Table 4.1: DBSCAN radius 2-5 cm, inlier distance 1 cm).
-O3D_SOR = (20, 2.0)
-O3D_DBSCAN = (0.05, 10)
-O3D_PLANE = (0.01, 3, 1000)
-O3D_MAX_PLANES = 8
-O3D_MIN_CLUSTER = 100
-O3D_MIN_PLANE = 30
-CUTOFF = 1.4
 MB = 1 << 20
 #: Stages of the ontodetect run, in order.
 STAGES = ("read", "segment", "score", "label", "write")
@@ -201,26 +204,9 @@ def work_o3d(path: Path, repeat: int) -> dict:
         t0 = time.perf_counter()
         pc = o3d.io.read_point_cloud(str(path))
         t1 = time.perf_counter()
-        pc, _ = pc.remove_statistical_outlier(*O3D_SOR)
-        pts = np.asarray(pc.points)
-        pc = pc.select_by_index(np.flatnonzero(pts[:, 2] < CUTOFF))
-        labels = np.asarray(pc.cluster_dbscan(*O3D_DBSCAN))
+        pc, labels = o3d_recipe.cluster(pc)
         t2 = time.perf_counter()
-        planes = 0
-        pts = np.asarray(pc.points)
-        for k in range(int(labels.max()) + 1 if labels.size else 0):
-            idx = np.flatnonzero(labels == k)
-            if len(idx) < O3D_MIN_CLUSTER:
-                continue
-            rest = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(pts[idx]))
-            for _ in range(O3D_MAX_PLANES):
-                if len(rest.points) < O3D_MIN_PLANE:
-                    break
-                _, inl = rest.segment_plane(*O3D_PLANE)
-                if len(inl) < O3D_MIN_PLANE:
-                    break
-                planes += 1
-                rest = rest.select_by_index(inl, invert=True)
+        planes = o3d_recipe.planes(pc, labels)
         t3 = time.perf_counter()
         runs.append(
             {
@@ -233,7 +219,7 @@ def work_o3d(path: Path, repeat: int) -> dict:
                 "planes": planes,
             }
         )
-        del pc, pts, labels
+        del pc, labels
     best = min(runs, key=lambda r: r["total"])
     return {**best, "runs": len(runs), "peak_mb": _peak_mb()}
 
