@@ -122,3 +122,46 @@ def test_input_not_modified(rng):
     dbscan(pts, RADIUS, 2)
     euclidean_clusters(pts, RADIUS)
     assert np.array_equal(pts, before)
+
+
+# -- part-driven clusters: a sofa is one object ---------------------------------------------
+def _box_faces(rng, lo, hi, spacing=0.02):
+    """Points on the visible faces of an axis-aligned box (all but the underside)."""
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    ex, ey, ez = np.diag(hi - lo)
+    faces = [(lo + ez, ex, ey), (lo, ex, ez), (lo + ey, ex, ez), (lo, ey, ez), (lo + ex, ey, ez)]
+    out = []
+    for corner, u, v in faces:
+        nu = max(2, int(np.linalg.norm(u) / spacing))
+        nv = max(2, int(np.linalg.norm(v) / spacing))
+        s, t = np.meshgrid(np.arange(nu) / nu, np.arange(nv) / nv)
+        pts = corner + s.reshape(-1, 1) * u + t.reshape(-1, 1) * v
+        out.append(pts + rng.normal(0, 0.002, pts.shape))
+    return np.vstack(out)
+
+
+def upholstered_sofa(rng, x0=0.0, y0=0.0, length=1.9):
+    """Seat cushions at 42 cm, a 45 cm thick back with a flat top at 75 cm, two arms."""
+    arm, depth, back = 0.2, 1.0, 0.45
+    seat = _box_faces(rng, (x0 + arm, y0, 0.1), (x0 + length - arm, y0 + depth - back, 0.42))
+    backrest = _box_faces(rng, (x0, y0 + depth - back, 0.1), (x0 + length, y0 + depth, 0.75))
+    arms = [
+        _box_faces(rng, (x, y0, 0.1), (x + arm, y0 + depth - back, 0.6))
+        for x in (x0, x0 + length - arm)
+    ]
+    return np.vstack([seat, backrest, *arms])
+
+
+def test_a_sofa_with_a_thick_back_falls_into_one_cluster(rng):
+    from ontodetect.segment import segment
+
+    floor = np.c_[rng.uniform(-1.5, 3.5, (20000, 2)), np.zeros(20000)]
+    sofa = upholstered_sofa(rng)
+    seg = segment(np.vstack([floor, sofa]), fit_planes=False, seed=0)
+    labels = seg.labels_per_point()[len(floor) :]
+    counts = np.bincount(labels[labels >= 0])
+    best = int(counts.argmax())
+    assert counts[best] / len(sofa) >= 0.8
+    # The back's flat top joined the seat: one part, at seat height.
+    assert [p.kind for p in seg[best].parts] == ["seat"]
+    assert seg[best].parts[0].height < 0.5

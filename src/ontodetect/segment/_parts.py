@@ -10,8 +10,9 @@ beside it - within a short distance of its outline. So:
 1. horizontal patches at part height (Table 4.1: seats at 35–75 cm; table tops a
    little higher), flat and at least as wide as a seat, are found; touching patches
    at one height (sofa cushions) are one part, and narrow patches a little above a
-   seat within its outline (armrests, the top of a sofa's back) join it; each part
-   is a seed;
+   seat within its outline (armrests, the top of a sofa's back) join it, and so does
+   the flat top of a thick upholstered back a little further behind a long seat; each
+   part is a seed;
 2. each seed claims the voxels of its *prism* that it reaches along the surface
    within a path length. A seat's prism is its outline grown by 30 cm, up to 80 cm
    above it (backrest, legs, armrests); a top's is its outline grown by 5 cm below
@@ -28,7 +29,8 @@ beside it - within a short distance of its outline. So:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import NDArray
@@ -82,6 +84,22 @@ ARM_RISE = (0.1, 0.45)
 ARM_WIDTH = 0.6
 ARM_MARGIN = 0.25
 ARM_SHARE = 0.7
+#: The top of a sofa's backrest stands behind the back cushions, up to this far (m)
+#: from the seat; it spans the seat, being no longer than the seat plus its arms
+#: (``BACK_OVERHANG`` m) and at least ``BACK_SPAN`` of the seat's length (an end table
+#: beside an arm is shorter; a desk a chair stands at, longer). Backrests thick enough
+#: to show a horizontal top are upholstered sofas': seats at least ``BACK_SEAT_LENGTH``
+#: long (longer than a chair's, so that a small table beside a chair stays apart),
+#: backs no higher than ``BACK_TOP`` (m; a shelf above a low table is no backrest).
+BACK_REACH = 0.5
+BACK_OVERHANG = 0.5
+BACK_SPAN = 0.3
+BACK_SEAT_LENGTH = 0.8
+BACK_TOP = 0.95
+#: Points this close (m) to a voxel of a part, about the gaps of a sparse scan, lie on
+#: it: armrests and backrest tops stand outside a seat's box, and the box of an L-shaped
+#: seat is a diagonal rectangle that misses the ends of its arms.
+FOOTPRINT_GAP = 0.05
 #: Long regions are split by dividing the longest link they keep by this, repeatedly.
 SPLIT_STEP = 1.25
 
@@ -104,6 +122,9 @@ class PartSeed:
         Rows: direction of the long and the short side.
     extent : (2,) float
         Long and short side of its horizontal box (m).
+    attached : (j, 2) float, optional
+        Horizontal positions of the armrests and backrest top that joined a seat:
+        its prism reaches around them as well as around its box.
     """
 
     voxels: NDArray[np.int64]
@@ -112,6 +133,13 @@ class PartSeed:
     center: NDArray[np.float64]
     axes: NDArray[np.float64]
     extent: NDArray[np.float64]
+    attached: NDArray[np.float64] | None = field(default=None, repr=False, compare=False)
+
+    @cached_property
+    def _attached_tree(self) -> cKDTree | None:
+        if self.kind != "seat" or self.attached is None or len(self.attached) == 0:
+            return None
+        return cKDTree(self.attached)
 
     @property
     def kind(self) -> str:
@@ -136,12 +164,18 @@ class PartSeed:
     def outside(self, points: NDArray[np.float64], signed: bool = False) -> NDArray[np.float64]:
         """(k,) float: horizontal distance (m) of points outside the outline.
 
-        0 inside, or with ``signed`` minus the distance to the nearest side.
+        0 inside, or with ``signed`` minus the distance to the nearest side. For a
+        seat with attached armrests, at most the distance to the nearest of their
+        voxels beyond ``FOOTPRINT_GAP``.
         """
         d = np.abs((points[:, :2] - self.center) @ self.axes.T) - self.extent / 2
         out = np.linalg.norm(np.maximum(d, 0.0), axis=1)
         if signed:
             out = np.where(out > 0, out, d.max(axis=1))
+        tree = self._attached_tree
+        if tree is not None:
+            dist, _ = tree.query(points[:, :2], k=1)
+            out = np.minimum(out, np.maximum(dist - FOOTPRINT_GAP, 0.0))
         return out
 
     def in_prism(
@@ -186,9 +220,10 @@ def _outline(xy: NDArray[np.float64]):
 
 
 def _seed(vox, centers, voxel_area) -> PartSeed:
+    vox = np.sort(vox).astype(np.int64)
     c, axes, ext = _outline(centers[vox, :2])
     return PartSeed(
-        np.sort(vox).astype(np.int64),
+        vox,
         float(np.median(centers[vox, 2])),
         float(len(vox) * voxel_area),
         c,
@@ -269,13 +304,24 @@ def _merge_armrests(seeds: list[PartSeed], centers, voxel_area) -> list[PartSeed
     for i, low in enumerate(seeds):
         if low.kind != "seat" or i in taken:
             continue
+        # Near the seat's voxels counts as on it even outside its box (L-shaped seats).
+        low_tree = cKDTree(centers[low.voxels, :2])
         for j, high in enumerate(seeds):
             if j == i or j in taken or j in merged:
                 continue
             rise = high.height - low.height
             if not ARM_RISE[0] <= rise <= ARM_RISE[1] or high.extent[1] > ARM_WIDTH:
                 continue
-            if np.mean(low.in_prism(centers[high.voxels], margin=ARM_MARGIN)) >= ARM_SHARE:
+            near, _ = low_tree.query(centers[high.voxels, :2], k=1)
+            out = np.minimum(low.outside(centers[high.voxels]), near - FOOTPRINT_GAP)
+            arm = np.mean(out <= ARM_MARGIN) >= ARM_SHARE
+            back = (
+                low.extent[0] >= BACK_SEAT_LENGTH
+                and high.height <= BACK_TOP
+                and np.mean(out <= BACK_REACH) >= ARM_SHARE
+                and BACK_SPAN * low.extent[0] <= high.extent[0] <= low.extent[0] + BACK_OVERHANG
+            )
+            if arm or back:
                 merged.setdefault(i, []).append(j)
                 taken.add(j)
     out = []
@@ -286,7 +332,15 @@ def _merge_armrests(seeds: list[PartSeed], centers, voxel_area) -> list[PartSeed
             vox = np.concatenate([sd.voxels] + [seeds[j].voxels for j in merged[i]])
             grown = _seed(vox, centers, voxel_area)
             # Keep the seat's own height and outline: the armrests only join its cluster.
-            sd = PartSeed(grown.voxels, sd.height, grown.area, sd.center, sd.axes, sd.extent)
+            sd = PartSeed(
+                grown.voxels,
+                sd.height,
+                grown.area,
+                sd.center,
+                sd.axes,
+                sd.extent,
+                centers[np.concatenate([seeds[j].voxels for j in merged[i]]), :2],
+            )
         out.append(sd)
     return out
 
@@ -375,6 +429,10 @@ def seeded_clusters(
     xy_tree = cKDTree(centers[:, :2]) if m else None
     for k, s in enumerate(seeds):
         reach = float(np.hypot(*(s.extent / 2 + s.margin)))
+        if s.attached is not None and len(s.attached):
+            # Armrests and backrest tops that joined a seat lie beyond its box.
+            far = float(np.linalg.norm(s.attached - s.center, axis=1).max())
+            reach = max(reach, far + s.margin + FOOTPRINT_GAP)
         near = np.asarray(xy_tree.query_ball_point(s.center, reach), dtype=np.int64)
         near = np.sort(near[core[near]])
         near = near[s.in_prism(centers[near])]
