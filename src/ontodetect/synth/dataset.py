@@ -147,18 +147,7 @@ _SCANNERS: dict[str, Callable[..., SensorOutput]] = {
     "monocular": _sensors.scan_monocular_slam,
 }
 _CAMERA_OPTIONS = {f.name for f in dataclasses.fields(_sensors.RGBDSensor)}
-_MONOCULAR_CAMERA = {
-    "width",
-    "height",
-    "fx",
-    "fy",
-    "cx",
-    "cy",
-    "min_range",
-    "max_range",
-    "stride",
-    "color_noise",
-}
+_MONOCULAR_CAMERA = _sensors.MONOCULAR_CAMERA_OPTIONS
 
 
 def sensor_options(sensor: str) -> list[str]:

@@ -1270,6 +1270,12 @@ def scan_tls(
 # ----------------------------------------------------------------------------------------
 # monocular SLAM
 # ----------------------------------------------------------------------------------------
+#: Camera settings the monocular SLAM simulation accepts.
+MONOCULAR_CAMERA_OPTIONS = frozenset(
+    {"width", "height", "fx", "fy", "cx", "cy", "min_range", "max_range", "stride", "color_noise"}
+)
+
+
 def scan_monocular_slam(
     scene: Scene,
     *,
@@ -1341,18 +1347,7 @@ def scan_monocular_slam(
     1.0
     """
     scene = _check_scene(scene)
-    allowed = {
-        "width",
-        "height",
-        "fx",
-        "fy",
-        "cx",
-        "cy",
-        "min_range",
-        "max_range",
-        "stride",
-        "color_noise",
-    }
+    allowed = MONOCULAR_CAMERA_OPTIONS
     unknown = sorted(set(camera) - allowed)
     if unknown:
         raise InvalidParameterError(unknown[0], f"one of {sorted(allowed)}", camera[unknown[0]])
