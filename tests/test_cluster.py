@@ -140,13 +140,13 @@ def _box_faces(rng, lo, hi, spacing=0.02):
     return np.vstack(out)
 
 
-def upholstered_sofa(rng, x0=0.0, y0=0.0, length=1.9):
+def upholstered_sofa(rng, x0=0.0, y0=0.0, length=1.9, arm_height=0.6):
     """Seat cushions at 42 cm, a 45 cm thick back with a flat top at 75 cm, two arms."""
     arm, depth, back = 0.2, 1.0, 0.45
     seat = _box_faces(rng, (x0 + arm, y0, 0.1), (x0 + length - arm, y0 + depth - back, 0.42))
     backrest = _box_faces(rng, (x0, y0 + depth - back, 0.1), (x0 + length, y0 + depth, 0.75))
     arms = [
-        _box_faces(rng, (x, y0, 0.1), (x + arm, y0 + depth - back, 0.6))
+        _box_faces(rng, (x, y0, 0.1), (x + arm, y0 + depth - back, arm_height))
         for x in (x0, x0 + length - arm)
     ]
     return np.vstack([seat, backrest, *arms])
@@ -165,3 +165,75 @@ def test_a_sofa_with_a_thick_back_falls_into_one_cluster(rng):
     # The back's flat top joined the seat: one part, at seat height.
     assert [p.kind for p in seg[best].parts] == ["seat"]
     assert seg[best].parts[0].height < 0.5
+
+
+def _best_share(rng, sofa, *others):
+    from ontodetect.segment import segment
+
+    floor = np.c_[rng.uniform(-1.5, 3.5, (20000, 2)), np.zeros(20000)]
+    pts = np.vstack([floor, sofa, *others])
+    seg = segment(pts, fit_planes=False, seed=0)
+    labels = seg.labels_per_point()
+    start = len(floor)
+    mine = labels[start : start + len(sofa)]
+    counts = np.bincount(mine[mine >= 0])
+    best = int(counts.argmax())
+    return seg, labels, best, counts[best] / len(sofa)
+
+
+def test_arms_as_high_as_the_back_join_the_seat(rng):
+    # The flat tops of the arms and of the back touch: one U-shaped part, as deep as
+    # the sofa but nowhere wider than an arm or the back.
+    sofa = upholstered_sofa(rng, arm_height=0.75)
+    seg, _, best, share = _best_share(rng, sofa)
+    assert share >= 0.8
+    assert [p.kind for p in seg[best].parts] == ["seat"]
+
+
+def framed_sofa(rng, length=1.2, depth=0.75, seat=0.35, top=0.68):
+    """A sofa with thin arms and back (no flat top on them) and a seat at ``seat`` m."""
+    t = 0.05
+    parts = [
+        _box_faces(rng, (t, 0.0, seat - 0.05), (length - t, depth - t, seat)),
+        _box_faces(rng, (0.0, depth - t, 0.05), (length, depth, top)),
+        _box_faces(rng, (0.0, 0.0, 0.05), (t, depth - t, top - 0.1)),
+        _box_faces(rng, (length - t, 0.0, 0.05), (length, depth - t, top - 0.1)),
+    ]
+    return np.vstack(parts)
+
+
+def test_a_sofa_seen_in_part_is_one_cluster_and_the_console_behind_it_is_not(rng):
+    # A sparse scan sees the seat as a dense patch at its front only: the back and the
+    # far arm lie beyond a seat's reach from that patch, yet within reach of the seat
+    # as scanned. A console table standing against the back stays apart.
+    sofa = framed_sofa(rng)
+    on_seat = (np.abs(sofa[:, 2] - 0.35) < 0.01) & (sofa[:, 0] > 0.05) & (sofa[:, 0] < 1.15)
+    far = on_seat & ((sofa[:, 1] > 0.35) | (sofa[:, 0] > 0.7))
+    sofa = sofa[~(far & (rng.random(len(sofa)) < 0.97))]
+    console = np.vstack(
+        [
+            _box_faces(rng, (0.1, 0.78, 0.82), (1.1, 1.13, 0.85)),
+            *(
+                _box_faces(rng, (x, y, 0.0), (x + 0.04, y + 0.04, 0.82))
+                for x in (0.12, 1.04)
+                for y in (0.8, 1.07)
+            ),
+        ]
+    )
+    _, labels, best, share = _best_share(rng, sofa, console)
+    assert share >= 0.8
+    assert np.mean(labels[-len(console) :] == best) < 0.2
+
+
+def test_width_is_the_widest_disc_not_the_box():
+    from ontodetect.segment._parts import _width
+
+    cell = 0.03
+    g = np.stack(np.meshgrid(np.arange(0, 1.8, cell), np.arange(0, 0.9, cell)), -1).reshape(-1, 2)
+    assert _width(g, cell) == pytest.approx(0.9, abs=0.1)
+    # The tops of a back and two arms: a U as deep as the sofa, 25 cm wide everywhere.
+    u = g[(g[:, 1] > 0.65) | (g[:, 0] < 0.25) | (g[:, 0] > 1.55)]
+    assert _width(u, cell) == pytest.approx(0.25, abs=0.07)
+    # A sparse top is as wide as its short side once its gaps are closed.
+    holes = g[np.random.default_rng(0).random(len(g)) < 0.5]
+    assert _width(holes, cell) == pytest.approx(0.9, abs=0.15)

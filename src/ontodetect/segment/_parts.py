@@ -10,9 +10,10 @@ beside it - within a short distance of its outline. So:
 1. horizontal patches at part height (Table 4.1: seats at 35–75 cm; table tops a
    little higher), flat and at least as wide as a seat, are found; touching patches
    at one height (sofa cushions) are one part, and narrow patches a little above a
-   seat within its outline (armrests, the top of a sofa's back) join it, and so does
-   the flat top of a thick upholstered back a little further behind a long seat; each
-   part is a seed;
+   seat within its outline (armrests, the top of a sofa's back; narrow meaning no
+   wider anywhere than an arm, so that the U of a back's and arms' tops counts) join
+   it, and so does the flat top of a thick upholstered back a little further behind a
+   long seat; each part is a seed;
 2. each seed claims the voxels of its *prism* that it reaches along the surface
    within a path length. A seat's prism is its outline grown by 30 cm, up to 80 cm
    above it (backrest, legs, armrests); a top's is its outline grown by 5 cm below
@@ -24,7 +25,10 @@ beside it - within a short distance of its outline. So:
 3. what no seed claims forms connected pieces; pieces longer than a cluster may be
    are split again with shorter links (walls with doors and shelves link a whole
    room), and pieces lying mostly in a part's prism next to its cluster (a backrest
-   or a swivel base cut off by a gap in a sparse scan) join it.
+   or a swivel base cut off by a gap in a sparse scan) join it. For a low seat the
+   prism may also be drawn around its cluster's box, or a little around what it
+   claimed at its own height: a sparse seat is found as a patch, and the back and
+   arms of its sofa stand beyond the patch's reach.
 """
 
 from __future__ import annotations
@@ -34,7 +38,7 @@ from functools import cached_property
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import sparse
+from scipy import ndimage, sparse
 from scipy.sparse.csgraph import connected_components, dijkstra
 from scipy.spatial import cKDTree
 
@@ -80,6 +84,9 @@ JOIN_DISTANCE = 0.25
 JOIN_SHARE = 0.6
 #: A part 10–45 cm above a seat, narrower than this (m) and mostly within the seat's
 #: outline grown by ``ARM_MARGIN``, is an armrest or the top of a backrest (sofas).
+#: Narrow means the widest disc that fits in it, not the short side of its box: the
+#: flat tops of a thick back and of the arms beside it touch and form one U- or
+#: L-shaped part whose box is as deep as the sofa.
 ARM_RISE = (0.1, 0.45)
 ARM_WIDTH = 0.6
 ARM_MARGIN = 0.25
@@ -100,6 +107,17 @@ BACK_TOP = 0.95
 #: it: armrests and backrest tops stand outside a seat's box, and the box of an L-shaped
 #: seat is a diagonal rectangle that misses the ends of its arms.
 FOOTPRINT_GAP = 0.05
+#: Voxels of a seat's cluster this close (m) to its height are the seat as scanned.
+SEAT_LEVEL = 0.05
+#: Fragments join a seat's cluster within ``LEVEL_MARGIN`` (m) of what it claimed at its
+#: own height (a back leaning behind a seat seen in part), or within ``FOOTPRINT_GAP`` of
+#: its whole box (a back between two arms), for seats no higher than ``LOW_SEAT`` (m):
+#: parts at 60–75 cm are as often desk tops, whose clusters must not grow that way.
+LEVEL_MARGIN = 0.2
+LOW_SEAT = 0.6
+#: Around the armrests and back top that joined a seat its prism reaches only this far
+#: (m) beyond ``FOOTPRINT_GAP``: their outer faces drop straight to the floor.
+ATTACHED_MARGIN = 0.1
 #: Long regions are split by dividing the longest link they keep by this, repeatedly.
 SPLIT_STEP = 1.25
 
@@ -184,15 +202,25 @@ class PartSeed:
         """(k,) bool: points within ``margin`` of the outline and below ``height + rise``.
 
         Above a table top only its outline counts: what stands beside it and rises
-        above it (a chair's backrest against its edge) is something else.
+        above it (a chair's backrest against its edge) is something else. Around the
+        armrests and back top attached to a seat, ``ATTACHED_MARGIN`` applies.
         """
         margin = self.margin if margin is None else margin
-        out = self.outside(points, signed=True)
+        d = np.abs((points[:, :2] - self.center) @ self.axes.T) - self.extent / 2
+        out = np.linalg.norm(np.maximum(d, 0.0), axis=1)
+        out = np.where(out > 0, out, d.max(axis=1))
         above = points[:, 2] > self.height + ABOVE_TOLERANCE
         # The outline of a patch is known to about a voxel: above a top, only what is
         # clearly inside it counts.
         allowed = np.where(above & (self.kind == "top"), -ABOVE_TOLERANCE, margin)
-        return (out <= allowed) & (points[:, 2] <= self.height + self.rise)
+        inside = out <= allowed
+        tree = self._attached_tree
+        if tree is not None:
+            # The outer faces of arms and of a thick back drop from their tops: what
+            # stands further out (a console table behind the sofa) is something else.
+            dist, _ = tree.query(points[:, :2], k=1)
+            inside |= dist <= FOOTPRINT_GAP + min(margin, ATTACHED_MARGIN)
+        return inside & (points[:, 2] <= self.height + self.rise)
 
     def to_dict(self) -> dict:
         return {
@@ -301,6 +329,7 @@ def _merge_armrests(seeds: list[PartSeed], centers, voxel_area) -> list[PartSeed
     seeds = sorted(seeds, key=lambda s: (-s.area, int(s.voxels[0])))
     merged: dict[int, list[int]] = {}
     taken = set()
+    cell = float(np.sqrt(voxel_area))
     for i, low in enumerate(seeds):
         if low.kind != "seat" or i in taken:
             continue
@@ -310,7 +339,9 @@ def _merge_armrests(seeds: list[PartSeed], centers, voxel_area) -> list[PartSeed
             if j == i or j in taken or j in merged:
                 continue
             rise = high.height - low.height
-            if not ARM_RISE[0] <= rise <= ARM_RISE[1] or high.extent[1] > ARM_WIDTH:
+            if not ARM_RISE[0] <= rise <= ARM_RISE[1]:
+                continue
+            if high.extent[1] > ARM_WIDTH and _width(centers[high.voxels, :2], cell) > ARM_WIDTH:
                 continue
             near, _ = low_tree.query(centers[high.voxels, :2], k=1)
             out = np.minimum(low.outside(centers[high.voxels]), near - FOOTPRINT_GAP)
@@ -343,6 +374,23 @@ def _merge_armrests(seeds: list[PartSeed], centers, voxel_area) -> list[PartSeed
             )
         out.append(sd)
     return out
+
+
+def _width(xy: NDArray[np.float64], cell: float) -> float:
+    """Diameter (m) of the widest disc inside a patch sampled every ``cell`` m.
+
+    Gaps up to ``FOOTPRINT_GAP`` (a sparse scan) are closed first, so a table top
+    with holes is still as wide as its short side.
+    """
+    if len(xy) == 0 or cell <= 0:
+        return 0.0
+    close = max(1, int(np.ceil(FOOTPRINT_GAP / cell)))
+    ij = np.floor((xy - xy.min(axis=0)) / cell).astype(np.int64) + close + 1
+    grid = np.zeros(tuple(ij.max(axis=0) + close + 2), dtype=bool)
+    grid[ij[:, 0], ij[:, 1]] = True
+    grid = ndimage.binary_closing(grid, iterations=close)
+    # A strip w cells wide has its largest distance to the outside at about (w + 1) / 2.
+    return float(max(2.0 * ndimage.distance_transform_edt(grid).max() - 1.0, 1.0) * cell)
 
 
 def _groups(labels: NDArray[np.int64]) -> list[NDArray[np.int64]]:
@@ -513,13 +561,34 @@ def _split_long(labels, centers, r, c, d, max_length, min_radius):
 
 
 def _join_fragments(labels, centers, seeds, n_seeds) -> None:
-    """Fragments lying mostly in a part's prism, close to its cluster, join that cluster."""
+    """Fragments lying mostly in a part's prism, close to its cluster, join that cluster.
+
+    A seat's cluster reaches past the seat's prism when its arms do: the part of a
+    sofa's back between two arms, or an arm at the far end of a sparse seat of which
+    only a patch was found, lies within the box of what the seat claimed.
+    """
     claimed = labels >= 0
     seeded = claimed & (labels < n_seeds)
     if not seeded.any():
         return
     tree = cKDTree(centers[seeded])
     owner = labels[seeded]
+    boxes: dict[int, tuple[PartSeed, PartSeed]] = {}
+
+    def footprints(k: int) -> tuple[PartSeed, PartSeed]:
+        # The seat's prism around the box of its whole cluster, and around the box
+        # of what it claimed at its own height (the seat as scanned, of which the
+        # part may be only a dense patch).
+        if k not in boxes:
+            s = seeds[k]
+            mine = centers[labels == k]
+            level = mine[np.abs(mine[:, 2] - s.height) <= SEAT_LEVEL]
+            boxes[k] = tuple(
+                PartSeed(s.voxels, s.height, s.area, *_outline(pts[:, :2]))
+                for pts in (mine, level if len(level) else mine)
+            )
+        return boxes[k]
+
     for frag in _groups(np.where(labels >= n_seeds, labels, -1)):
         dist, idx = tree.query(centers[frag], k=1, distance_upper_bound=JOIN_DISTANCE)
         hit = np.isfinite(dist)
@@ -528,7 +597,12 @@ def _join_fragments(labels, centers, seeds, n_seeds) -> None:
         candidates = np.unique(owner[idx[hit]])
         best, best_d = -1, np.inf
         for k in candidates:
-            share = float(np.mean(seeds[k].in_prism(centers[frag])))
+            inside = seeds[k].in_prism(centers[frag])
+            if seeds[k].height <= LOW_SEAT:
+                whole, level = footprints(int(k))
+                inside |= whole.in_prism(centers[frag], margin=FOOTPRINT_GAP)
+                inside |= level.in_prism(centers[frag], margin=LEVEL_MARGIN)
+            share = float(np.mean(inside))
             dk = float(dist[hit][owner[idx[hit]] == k].min())
             if share >= JOIN_SHARE and dk < best_d:
                 best, best_d = int(k), dk
