@@ -13,6 +13,7 @@ from ontodetect.ontology import (
     Gaussian,
     builtin_ontology,
     class_priors,
+    missing_factor,
     parse_ontology,
     room_distribution,
     score_class,
@@ -121,6 +122,49 @@ def test_occluded_backrest_is_penalised_not_fatal():
     assert s.assignment["backrest"] is None
     assert s.factors["backrest"]["missing"] == pytest.approx(0.12)
     assert s.likelihood > 0.01
+
+
+def backrest_behind_desk(*, bottom=0.5, shelter=0.74):
+    """Only the upper backrest of a chair pushed under a desk: a lifted reclined plane."""
+    back = P(tilt=70, height=0.75, length=0.42, width=0.5)
+    return ClusterDescription(planes=[back], relations={}, length=0.44, breadth=0.24,
+                              height=0.98, bottom=bottom, shelter=shelter)
+
+
+def test_seat_hidden_behind_a_desk_counts_as_occluded():
+    o = builtin_ontology()
+    chair_class = o["chair"]
+    seat = chair_class.part("seat")
+    assert seat.occluded == pytest.approx(0.15)
+    assert missing_factor(seat, backrest_behind_desk()) == pytest.approx(0.15)
+    # Standing on the floor, with nothing beside it, or seen from far above where a
+    # seat could be: a missing seat is simply missing.
+    for desc in (backrest_behind_desk(bottom=0.03), backrest_behind_desk(shelter=-math.inf),
+                 backrest_behind_desk(shelter=0.3), backrest_behind_desk(bottom=0.9)):
+        assert missing_factor(seat, desc) == pytest.approx(seat.missing)
+    hidden = score_cluster(backrest_behind_desk(), o)
+    alone = score_cluster(backrest_behind_desk(shelter=-math.inf), o)
+    assert hidden.best == "chair" and hidden.probabilities["chair"] > 0.5
+    assert alone.best == NONE
+    s = score_class(chair_class, backrest_behind_desk())
+    assert s.assignment["seat"] is None and s.factors["seat"]["missing"] == pytest.approx(0.15)
+
+
+def test_occluded_without_a_height_constraint_and_invalid_values(tmp_path):
+    text = ("format: ontodetect.ontology/1\nclasses:\n  thing:\n    parts:\n"
+            "      foot: {occluded: 0.4, tilt: {max: 5}}\n      side: {tilt: {min: 80}}\n")
+    o = parse_ontology(text, "x.yaml")
+    foot, side = o["thing"].part("foot"), o["thing"].part("side")
+    assert side.occluded is None
+    lifted = backrest_behind_desk()
+    assert missing_factor(foot, lifted) == pytest.approx(0.4)
+    assert missing_factor(side, lifted) == pytest.approx(side.missing)
+    f = tmp_path / "bad.yaml"
+    f.write_text(text.replace("occluded: 0.4", "occluded: 1.5"))
+    from ontodetect.ontology import read_ontology_file
+
+    with pytest.raises(InvalidOntologyError, match=r"\[classes.thing.parts.foot.occluded\]"):
+        read_ontology_file(f)
 
 
 def test_each_factor_follows_its_gaussian():

@@ -1,5 +1,7 @@
 """The pipeline on simulated rooms: what it finds, determinism, index mapping, the demo."""
 
+import math
+
 import numpy as np
 import pytest
 
@@ -61,3 +63,28 @@ def test_demo_runs_and_scores_itself(tmp_path):
     assert d.files.detections.exists() and d.files.picture.exists()
     assert d.evaluation.per_class["chair"].num_gt == 1
     assert d.evaluation.overall.tp >= 1
+
+
+def test_shelter_is_the_highest_top_beside_a_cluster():
+    from types import SimpleNamespace
+
+    from ontodetect.pipeline import shelter_heights
+
+    def plane(tilt, height, area):
+        return SimpleNamespace(tilt=tilt, height=height, area=area)
+
+    def box(cx, cy, sx, sy, yaw=0.0):
+        return SimpleNamespace(center=np.array([cx, cy, 0.5]), size=np.array([sx, sy, 1.0]),
+                               yaw=yaw)
+
+    desk = SimpleNamespace(planes=[plane(1, 0.74, 1.2), plane(88, 0.4, 0.5)],
+                           box=box(0, 0, 1.6, 0.8))
+    backrest = SimpleNamespace(planes=[plane(70, 0.8, 0.15)], box=box(0, 0.7, 0.45, 0.25))
+    # A 45-degree turn of a 0.4 m square reaches 0.28 m from its centre.
+    far = SimpleNamespace(planes=[plane(2, 0.45, 0.2)], box=box(1.6, 0, 0.4, 0.4, math.pi / 4))
+    got = shelter_heights([desk, backrest, far])
+    assert got[1] == pytest.approx(0.74)  # the desk stands beside the backrest
+    assert got[0] == -math.inf  # the backrest has no large horizontal plane
+    # the rotated box's footprint reaches 1.32 m: 0.52 m from the desk, beyond the gap
+    assert got[2] == -math.inf
+    assert shelter_heights([]).shape == (0,)

@@ -33,7 +33,7 @@ from .ontology import (
 )
 from .segment import Cluster, Segmentation, segment
 
-__all__ = ["Detection", "Result", "describe_cluster", "detect", "with_cad"]
+__all__ = ["Detection", "Result", "describe_cluster", "detect", "shelter_heights", "with_cad"]
 
 #: Format tag of detections.json.
 DETECTIONS_FORMAT = "ontodetect.detections/1"
@@ -179,8 +179,9 @@ def with_cad(result: Result, fits: Sequence[Any]) -> Result:
     return dataclasses.replace(result, detections=detections)
 
 
-def describe_cluster(cluster: Cluster) -> ClusterDescription:
-    """What the ontology scoring needs to know about a cluster."""
+def describe_cluster(cluster: Cluster, shelter: float = -math.inf) -> ClusterDescription:
+    """What the ontology scoring needs to know about a cluster (``shelter``: see
+    :func:`shelter_heights`)."""
     return ClusterDescription(
         planes=cluster.planes,
         relations=cluster.relations_by_pair,
@@ -188,7 +189,47 @@ def describe_cluster(cluster: Cluster) -> ClusterDescription:
         breadth=cluster.breadth,
         height=cluster.height,
         bottom=cluster.bottom,
+        shelter=shelter,
     )
+
+
+#: Horizontal planes (tilt below this, degrees) of at least ``SHELTER_AREA`` m² can hide ...
+SHELTER_TILT = 10.0
+SHELTER_AREA = 0.1
+#: ... what stands within this horizontal gap of their cluster's box (m).
+SHELTER_GAP = 0.4
+
+
+def _footprint(box: Any) -> NDArray:
+    """(2, 2) min and max corner of the xy rectangle around an upright box."""
+    c, s = math.cos(box.yaw), math.sin(box.yaw)
+    half = np.abs(np.array([[c, -s], [s, c]])) @ (np.asarray(box.size[:2], dtype=float) / 2)
+    center = np.asarray(box.center[:2], dtype=float)
+    return np.stack([center - half, center + half])
+
+
+def shelter_heights(seg: Segmentation) -> NDArray:
+    """(clusters,) height of the highest large horizontal surface beside each cluster.
+
+    For every cluster, the highest horizontal plane (a desk or table top) of any other
+    cluster whose footprint comes within ``SHELTER_GAP`` of its own; ``-inf`` when there
+    is none. A chair pushed under a desk shows only its backrest above the desk's top:
+    this is what tells the scoring its seat may be hidden rather than absent.
+    """
+    n = len(seg)
+    tops = np.full(n, -math.inf)
+    boxes = np.zeros((n, 2, 2))
+    for k, c in enumerate(seg):
+        flat = [float(p.height) for p in c.planes
+                if float(p.tilt) < SHELTER_TILT and float(p.area) >= SHELTER_AREA]
+        tops[k] = max(flat, default=-math.inf)
+        boxes[k] = _footprint(c.box)
+    if n == 0:
+        return tops
+    gap = np.maximum(boxes[None, :, 0] - boxes[:, None, 1], boxes[:, None, 0] - boxes[None, :, 1])
+    near = np.all(gap <= SHELTER_GAP, axis=2)
+    np.fill_diagonal(near, False)
+    return np.where(near, tops[None, :], -math.inf).max(axis=1)
 
 
 def _to_input_frame(seg: Segmentation, cluster: Cluster) -> tuple[NDArray, NDArray, float]:
@@ -296,9 +337,10 @@ def detect(
 
     t0 = time.perf_counter()
     scores: list[ClusterScores] = []
+    shelters = shelter_heights(seg)
     with progress("Scoring clusters", total=len(seg)) as advance:
-        for c in seg:
-            scores.append(score_cluster(describe_cluster(c), ontology, priors,
+        for c, shelter in zip(seg, shelters):
+            scores.append(score_cluster(describe_cluster(c, float(shelter)), ontology, priors,
                                         none_likelihood=none_likelihood))
             advance(1)
     timings["score"] = time.perf_counter() - t0

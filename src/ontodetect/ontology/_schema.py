@@ -88,6 +88,9 @@ class Part:
     constraints: Mapping[str, Gaussian]
     required: bool = True
     missing: float = 0.02
+    #: Factor for no plane when the part is hidden below the cluster's visible bottom
+    #: (a seat behind a desk); ``None``: the same as ``missing``.
+    occluded: float | None = None
 
 
 @dataclass(frozen=True)
@@ -342,8 +345,16 @@ def _part(name: str, spec: Any, path: tuple[Any, ...]) -> Part:
     missing = _number(missing, path + ("missing",), "a probability")
     if not 0.0 < missing <= 1.0:
         raise _Problem(path + ("missing",), f"expected a probability in (0, 1], got {missing:g}")
-    constraints = _constraints(spec, PART_FEATURES, path, {"required", "missing", "description"})
-    return Part(name=name, constraints=constraints, required=required, missing=missing)
+    occluded = spec.get("occluded")
+    if occluded is not None:
+        occluded = _number(occluded, path + ("occluded",), "a probability")
+        if not 0.0 < occluded <= 1.0:
+            raise _Problem(path + ("occluded",),
+                           f"expected a probability in (0, 1], got {occluded:g}")
+    constraints = _constraints(spec, PART_FEATURES, path,
+                               {"required", "missing", "occluded", "description"})
+    return Part(name=name, constraints=constraints, required=required, missing=missing,
+                occluded=occluded)
 
 
 def _relation(spec: Any, path: tuple[Any, ...], parts: set[str]) -> Relation:

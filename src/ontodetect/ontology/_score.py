@@ -7,8 +7,11 @@ occluded); the assignment with the highest likelihood
     P_ont|obj = Π_parts P_def,   P_def = P_Pr · P_Or · P_De · P_He      (Eq. 3.2, 3.3)
 
 is kept. A part without a plane contributes its ``missing`` factor instead:
-occlusion is penalised, not fatal. Relations between two parts count towards
-``P_Pr`` of the second part named. Cluster-wide rules (extent, number of planes)
+occlusion is penalised, not fatal. When the cluster stops short of the floor beside
+a surface that can hide its lower part, and the part belongs below what is visible
+(a chair pushed under a desk shows only its backrest), the part's ``occluded``
+factor applies instead, if the class gives one. Relations between two parts count
+towards ``P_Pr`` of the second part named. Cluster-wide rules (extent, number of planes)
 multiply in as one more factor. The posterior over the classes and a "none"
 hypothesis is then
 
@@ -29,13 +32,14 @@ from typing import Any
 import numpy as np
 
 from ._gaussian import Gaussian
-from ._schema import PART_FEATURES, ObjectClass, Ontology
+from ._schema import PART_FEATURES, ObjectClass, Ontology, Part
 
 __all__ = [
     "ClassScore",
     "ClusterDescription",
     "ClusterScores",
     "ConstraintValue",
+    "missing_factor",
     "plane_feature",
     "score_class",
     "score_cluster",
@@ -52,6 +56,15 @@ NONE = "none"
 #: A plane no part explains costs the full ``extra_plane`` factor from this area up (m²);
 #: smaller patches (a caster, a strip of a frame) cost proportionally less.
 EXTRA_PLANE_AREA = 0.08
+#: A cluster whose lowest point is this high above the floor (m) does not stand on it:
+#: something in front may hide its lower part ...
+LIFTED_BOTTOM = 0.2
+#: ... if a neighbouring surface (its ``shelter``) reaches at least this close below
+#: the cluster's lowest visible point (m).
+SHELTER_TOLERANCE = 0.05
+#: A part counts as hidden below a lifted cluster when the centre of its height
+#: constraint is less than this above the cluster's lowest point (m).
+HIDDEN_MARGIN = 0.1
 
 
 @dataclass(frozen=True)
@@ -69,6 +82,10 @@ class ClusterDescription:
     length, breadth, height, bottom : float
         Longest and shortest horizontal side of the upright box, top and lowest
         point above the floor (m).
+    shelter : float
+        Height above the floor of the highest horizontal surface of a neighbouring
+        object (a desk beside a chair), which can hide this cluster's lower part;
+        ``-inf`` when there is none or it is unknown.
     """
 
     planes: Sequence[Any]
@@ -77,6 +94,7 @@ class ClusterDescription:
     breadth: float
     height: float
     bottom: float
+    shelter: float = -math.inf
 
     @property
     def rise(self) -> float:
@@ -174,9 +192,41 @@ def _unary(cls: ObjectClass, desc: ClusterDescription) -> np.ndarray:
     return out
 
 
+def _height_span(g: Gaussian) -> tuple[float, float]:
+    """Centre and upper end of a height constraint (the upper end may be infinite)."""
+    if g.side == "plateau" and g.upper is not None:
+        return (g.mean + g.upper) / 2, g.upper
+    if g.side == "both":
+        return g.mean, g.mean + g.sigma
+    return g.mean, (g.mean if g.side == "max" else math.inf)
+
+
+def missing_factor(part: Part, desc: ClusterDescription) -> float:
+    """The factor of ``part`` left without a plane in this cluster.
+
+    ``part.missing``, or ``part.occluded`` when the part can be hidden: the cluster
+    is lifted off the floor (its bottom above ``LIFTED_BOTTOM``), a neighbouring
+    surface stands about as high as its lowest visible point (``desc.shelter``), and
+    the part belongs just below what is visible (the centre of its height range is
+    less than ``HIDDEN_MARGIN`` above the cluster's bottom, and the top of the range
+    is not below it).
+    """
+    bottom = float(desc.bottom)
+    if (part.occluded is None or bottom <= LIFTED_BOTTOM
+            or float(desc.shelter) < bottom - SHELTER_TOLERANCE):
+        return part.missing
+    height = part.constraints.get("height")
+    if height is not None:
+        centre, upper = _height_span(height)
+        if not centre < bottom + HIDDEN_MARGIN or bottom > upper:
+            return part.missing
+    return max(part.missing, part.occluded)
+
+
 def score_class(cls: ObjectClass, desc: ClusterDescription, log_prior: float = 0.0) -> ClassScore:
     """Find the most likely assignment of planes to the class's parts and its likelihood."""
     unary = _unary(cls, desc)
+    missing = [missing_factor(part, desc) for part in cls.parts]
     part_index = {p.name: k for k, p in enumerate(cls.parts)}
     candidates: list[list[int | None]] = []
     for p, part in enumerate(cls.parts):
@@ -197,7 +247,7 @@ def score_class(cls: ObjectClass, desc: ClusterDescription, log_prior: float = 0
             continue
         total = all_extra - float(sum(plane_log_extra[c] for c in used))
         for p, c in enumerate(combo):
-            total += unary[p, c] if c is not None else math.log(cls.parts[p].missing)
+            total += unary[p, c] if c is not None else math.log(missing[p])
         if total <= best_log:
             continue  # relation factors are <= 1: this cannot win
         for a, b, rel in rel_terms:
@@ -216,9 +266,9 @@ def score_class(cls: ObjectClass, desc: ClusterDescription, log_prior: float = 0
         plane = best_assign[p]
         groups = {"Or": 1.0, "He": 1.0, "De": 1.0, "Pr": 1.0}
         if plane is None:
-            groups["missing"] = part.missing
+            groups["missing"] = missing[p]
             constraints.append(ConstraintValue(part.name, "missing", "De", None, None,
-                                               part.missing))
+                                               missing[p]))
         else:
             for feature, g in part.constraints.items():
                 value = plane_feature(desc.planes[plane], feature)
