@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from types import SimpleNamespace
 
 import numpy as np
@@ -290,7 +291,7 @@ def test_a_change_that_lowers_validation_f1_is_rejected():
     bad = {seat_height: [1.5, 1.52, 1.48, 1.5], cluster_length: [0.5, 0.55, 0.6]}
     rooms = {r: bad for r in ("scene0001", "scene0002", "scene0003")}
     scenes = {r: [_chair_scene(r + "_00")] for r in rooms}
-    settings = FitSettings(prior_strength=0.0)
+    settings = FitSettings(prior_strength=0.0, min_gain_rooms=2)
     accepted, decisions = select_groups(ONTOLOGY, rooms, scenes, settings=settings)
     by_name = {d.name: d for d in decisions}
     seat = by_name["chair.parts.seat"]
@@ -299,7 +300,7 @@ def test_a_change_that_lowers_validation_f1_is_rejected():
     # A change that does not lower F1 but shows no gain either keeps the prior by default...
     assert not by_name["chair.cluster"].accepted
     # ...and is kept when ties are accepted.
-    ties = FitSettings(prior_strength=0.0, accept_ties=True)
+    ties = FitSettings(prior_strength=0.0, accept_ties=True, min_gain_rooms=2)
     tied, _ = select_groups(ONTOLOGY, rooms, scenes, settings=ties)
     assert ("chair", "cluster") in tied and ("chair", "parts", "seat") not in tied
     # The written file keeps the rejected group's prior.
@@ -317,6 +318,126 @@ def test_one_room_cannot_be_checked_so_nothing_changes():
         ONTOLOGY, rooms, {"scene0001": [_chair_scene("scene0001_00")]}
     )
     assert accepted == set() and decisions == []
+
+
+def _chair_at(name, seat_height):
+    """A validation scene with one chair whose seat is at ``seat_height`` (backrest fixed)."""
+    from ontodetect.evaluation import Instance
+    from ontodetect.evaluation._calibrate import ValidationScene
+
+    h = seat_height
+    seat = _plane(2.0, h, h - 0.01, h + 0.01, 0.45, 0.42, 0.17, (0.0, 0.0, h))
+    back = _plane(85.0, 0.8, 0.5, 1.1, 0.45, 0.4, 0.16, (0.0, 0.2, 0.8))
+    relation = SimpleNamespace(angle=83.0, distance=0.02, xy_overlap=0.1)
+    desc = ClusterDescription([back, seat], {(0, 1): relation}, 0.55, 0.5, 1.1, 0.0)
+    members = np.arange(100)
+    return ValidationScene(
+        name, (desc,), np.zeros((1, 3)), (members,), (Instance.make(1, "chair", members),)
+    )
+
+
+#: Seats measured from 0.45 to 0.9 m widen the seat height (0.55 +- 0.2) upwards: a chair
+#: with its seat at 0.95 m is then found, one at 0.46 m still is.
+TALL_SEATS = {("chair", "parts", "seat", "height"): [0.45, 0.6, 0.75, 0.9]}
+HIGH, LOW = 0.95, 0.46
+
+
+def _select(heights, **settings):
+    from ontodetect.evaluation._calibrate import select_groups
+
+    rooms = {f"scene000{i}": TALL_SEATS for i in range(1, len(heights) + 1)}
+    scenes = {r: [_chair_at(r + "_00", h)] for r, h in zip(rooms, heights)}
+    return select_groups(
+        ONTOLOGY, rooms, scenes, settings=FitSettings(prior_strength=0.0, **settings)
+    )
+
+
+def test_the_chairs_of_the_nested_check_behave_as_intended():
+    from ontodetect.evaluation._calibrate import _detect_counts, _detection_params
+
+    base = parse_ontology(ONTOLOGY)
+    fitted = parse_ontology(
+        calibrate_ontology(ONTOLOGY, TALL_SEATS, settings=FitSettings(prior_strength=0.0))[0]
+    )
+    params = _detection_params(base, {})
+    found = {
+        (h, which): int(_detect_counts(_chair_at("s", h), o, params, ["chair"])["chair"][0])
+        for h in (HIGH, LOW)
+        for which, o in (("base", base), ("fitted", fitted))
+    }
+    assert found == {(HIGH, "base"): 0, (HIGH, "fitted"): 1, (LOW, "base"): 1, (LOW, "fitted"): 1}
+
+
+def test_a_gain_in_a_single_left_out_room_is_not_enough():
+    accepted, decisions = _select([HIGH, LOW, LOW, LOW, LOW])
+    assert accepted == set()
+    (seat,) = decisions
+    assert seat.name == "chair.parts.seat" and not seat.accepted
+    assert seat.rooms_gained == ("scene0001",) and seat.rooms_lost == ()
+    assert "only in scene0001" in seat.reason
+    # The pooled F1 rose: the old rule would have kept it on one detection.
+    assert seat.f1_after["chair"] > seat.f1_before["chair"]
+
+
+def test_a_gain_in_several_left_out_rooms_is_kept():
+    # The default sign test: a gain in 4 rooms and a loss in none (p = 1/16 < 0.1).
+    accepted, decisions = _select([HIGH, HIGH, LOW, HIGH, HIGH])
+    assert accepted == {("chair", "parts", "seat")}
+    (seat,) = decisions
+    assert seat.accepted and seat.rooms_gained == (
+        "scene0001",
+        "scene0002",
+        "scene0004",
+        "scene0005",
+    )
+    assert seat.to_dict()["rooms_gained"] == list(seat.rooms_gained)
+    # Three rooms are not enough by default (p = 1/8), enough when asked for.
+    accepted, (seat,) = _select([HIGH, HIGH, LOW, HIGH, LOW])
+    assert accepted == set() and "needs a gain in 4 rooms" in seat.reason
+    accepted, _ = _select([HIGH, HIGH, LOW, HIGH, LOW], min_gain_rooms=3)
+    assert accepted == {("chair", "parts", "seat")}
+    # Ties asked for: a single room's gain is enough, since no gain is.
+    accepted, _ = _select([HIGH, LOW, LOW, LOW], accept_ties=True)
+    assert accepted == {("chair", "parts", "seat")}
+
+
+def test_a_loss_in_any_left_out_room_rejects_the_gain_of_the_others():
+    from ontodetect.evaluation._calibrate import select_groups
+
+    # Seats measured around 1 m only: the fitted height finds the high chairs and loses
+    # the low one.
+    rooms = {
+        f"scene000{i}": {("chair", "parts", "seat", "height"): [0.95, 1.0, 1.05, 1.0]}
+        for i in (1, 2, 3, 4, 5)
+    }
+    heights = (HIGH, HIGH, LOW, HIGH, HIGH)
+    scenes = {r: [_chair_at(r + "_00", h)] for r, h in zip(rooms, heights)}
+    _, (seat,) = select_groups(
+        ONTOLOGY, rooms, scenes, settings=FitSettings(prior_strength=0.0, min_gain_rooms=2)
+    )
+    assert not seat.accepted and seat.rooms_lost == ("scene0003",)
+    assert seat.rooms_gained == ("scene0001", "scene0002", "scene0004", "scene0005")
+
+
+def test_fewer_false_alarms_count_as_a_gain_where_f1_is_zero():
+    from ontodetect.evaluation._calibrate import _room_sign
+
+    assert _room_sign(np.array([0, 1, 2]), np.array([0, 2, 2])) == 1
+    assert _room_sign(np.array([0, 3, 2]), np.array([0, 2, 2])) == -1
+    assert _room_sign(np.array([1, 0, 1]), np.array([1, 0, 1])) == 0
+    assert _room_sign(np.array([2, 1, 0]), np.array([1, 0, 1])) == 1  # F1 decides
+
+
+def test_too_few_rooms_to_leave_out_validate_nothing():
+    # Three calibration rooms cannot show a gain in four: nothing is even tried.
+    accepted, decisions = _select([HIGH, HIGH, HIGH])
+    assert accepted == set() and decisions == []
+    accepted, decisions = _select([HIGH, HIGH], min_gain_rooms=3)
+    assert accepted == set() and decisions == []
+    with pytest.raises(InvalidParameterError, match="'min_gain_rooms'"):
+        FitSettings(min_gain_rooms=0)
+    assert FitSettings(min_gain_rooms=1).validation_rooms == 2
+    assert FitSettings(min_gain_rooms=4).validation_rooms == 4
 
 
 # -- the whole procedure on simulated rooms ------------------------------------------------
@@ -359,3 +480,35 @@ def test_calibration_compares_before_and_after_on_held_out_scenes(tiny_rooms):
     assert doc["split"]["held_out"] == held and doc["settings"]["min_samples"] == 2
     with pytest.raises(InvalidParameterError, match="detect_options"):
         calibrate_dataset(tiny_rooms, detect_options={"ontology": result.base})
+
+
+def test_a_single_calibration_room_keeps_the_original_and_says_so(tiny_rooms, tmp_path, capsys):
+    from ontodetect.cli import main
+
+    out = tmp_path / "one-room.yaml"
+    report = tmp_path / "report.json"
+    code = main(
+        [
+            "calibrate",
+            str(tiny_rooms),
+            "-o",
+            str(out),
+            "--split",
+            "0.25",
+            "--seed",
+            "3",
+            "--no-evaluate",
+            "--report",
+            str(report),
+        ]
+    )
+    captured = capsys.readouterr()
+    assert code == 0
+    err = " ".join(captured.err.split())
+    assert "warning: nested check NOT POSSIBLE, only 1 calibration room(s)" in err
+    assert "the file keeps the original values" in err
+    assert yaml.safe_load(out.read_text()) == yaml.safe_load(_builtin_text())
+    doc = json.loads(report.read_text())
+    assert doc["validation_rooms"] == [] and doc["nested_check"] == []
+    assert "NOT POSSIBLE" in doc["check"]
+    assert "NOT POSSIBLE" in out.read_text().split("format:")[0]  # the file's header says so

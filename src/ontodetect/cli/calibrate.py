@@ -10,6 +10,7 @@ from rich.table import Table
 
 from ..evaluation import FitSettings, calibrate_dataset
 from ..evaluation._calibrate import (
+    MIN_GAIN_ROOMS,
     MIN_ROOMS,
     ONE_SIDED_QUANTILE,
     PRIOR_SIGMA_SHARE,
@@ -18,7 +19,7 @@ from ..evaluation._calibrate import (
 from ..evaluation._dataset import DATASET_FORMATS
 from ..io import atomic_write_text
 from . import app
-from ._console import console, reporting, state
+from ._console import console, err_console, reporting, state
 from .evaluate import detect_options
 
 
@@ -65,7 +66,14 @@ def calibrate(
     validate: bool = typer.Option(
         True,
         "--validate/--no-validate",
-        help="Keep a fitted part only if it does not lower F1 on calibration rooms left out.",
+        help="Keep a fitted part only if it passes the nested check on calibration rooms "
+        "left out in turn (see --min-gain-rooms).",
+    ),
+    min_gain_rooms: int = typer.Option(
+        MIN_GAIN_ROOMS,
+        "--min-gain-rooms",
+        help="Keep a fitted part only if F1 rises in this many calibration rooms "
+        "left out in turn (and falls in none); fewer rooms: nothing changes.",
     ),
     report: Path | None = typer.Option(
         None,
@@ -104,6 +112,7 @@ def calibrate(
         min_rooms=min_rooms,
         prior_strength=prior_strength,
         validate=validate,
+        min_gain_rooms=min_gain_rooms,
     )
     with reporting():
         result = calibrate_dataset(
@@ -120,6 +129,10 @@ def calibrate(
     atomic_write_text(out, result.text)
     if report is not None:
         atomic_write_text(report, json.dumps(result.to_dict(), indent=1) + "\n")
+    if result.too_few_rooms:
+        # Even with --quiet: the file written equals the original, which must not pass
+        # for a calibrated one.
+        err_console.print(f"warning: nested check {result.check}", highlight=False)
     if state.quiet:
         return
     console.print(result.split.describe())
@@ -131,12 +144,19 @@ def calibrate(
     )
     for line in result.failed:
         console.print(f"[yellow]skipped[/] {line}")
-    if result.decisions:
-        kept = [d.name for d in result.decisions if d.accepted]
+    kept = [d.name for d in result.decisions if d.accepted]
+    if not result.too_few_rooms:
+        # Said in every case: a file that silently equals the original reads as calibrated.
+        style = "bold yellow" if result.settings.validate and not kept else "bold"
         console.print(
-            f"nested check on the calibration rooms: kept {len(kept)} of "
-            f"{len(result.decisions)} groups" + (f" ({', '.join(kept)})" if kept else "")
+            f"[{style}]nested check:[/] {result.check}"
+            + (f" Kept: {', '.join(kept)}." if kept else ""),
+            highlight=False,
         )
+    if state.verbose:
+        for d in result.decisions:
+            mark = "[green]kept[/]" if d.accepted else "rejected"
+            console.print(f"  {mark} {d.name}: {d.reason}", highlight=False)
     changed = [f for f in result.fits if f.changed]
     table = Table(title=f"{len(changed)} of {len(result.fits)} constraints calibrated")
     for col in ("constraint", "n", "before", "after"):

@@ -31,6 +31,7 @@ from ._calibrate import (
     fit_gaussian,
     select_groups,
     split_scenes,
+    validation_rooms,
 )
 from ._dataset import (
     CRITERIA,
@@ -117,6 +118,7 @@ __all__ = [
     "select_groups",
     "split_scenes",
     "summarize_outcomes",
+    "validation_rooms",
     "write_report",
 ]
 

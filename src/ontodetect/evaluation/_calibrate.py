@@ -33,9 +33,11 @@ A fitted change is only kept where it does not hurt detection on rooms it was no
 on, judged inside the calibration rooms alone (:func:`select_groups`): constraints are
 grouped by class and part (or relation, or cluster rules); each calibration room in turn
 is detected on with an ontology fitted on the other calibration rooms, and, group by
-group in file order, a group's change is accepted only if the F1 pooled over these
-validation rooms of no reported class, nor overall, falls below that of the changes
-accepted so far. The held-out rooms are never looked at.
+group in file order, a group's change is accepted only if it lowers no F1 (per class or
+overall, pooled or in any single validation room) and raises one in at least
+:data:`MIN_GAIN_ROOMS` validation rooms, a one-sided sign test over the rooms. With fewer
+calibration rooms than that, nothing can be validated and nothing changes. The held-out
+rooms are never looked at.
 
 The YAML keeps its structure (same classes, parts, relations and keys; only numbers
 change); comments are not kept.
@@ -95,6 +97,7 @@ __all__ = [
     "fit_gaussian",
     "select_groups",
     "split_scenes",
+    "validation_rooms",
 ]
 
 #: A ground-truth object calibrates only through a cluster with at least this point IoU
@@ -117,6 +120,15 @@ PRIOR_STRENGTH = 8.0
 ROOM_SAMPLES = 3
 #: A validation F1 "does not fall" when it is lower by at most this (float noise).
 F1_TOLERANCE = 1e-9
+#: The nested check keeps a group only when its gain shows in at least this many
+#: calibration rooms left out in turn, with no loss in any: a one-sided sign test over
+#: the left-out rooms. A change that does nothing, helping or hurting each room by
+#: chance, gains in k rooms and loses in none with probability 2^-k: 4 rooms is the
+#: least for 90 % confidence (p = 0.0625; 3 rooms give only 0.125). On ScanNet rooms a
+#: gain in 2 of 3 rooms (p = 0.25) came from one or two detections per room and cost
+#: recall on held-out rooms. With fewer calibration rooms to leave out, nothing can be
+#: validated and the original is kept.
+MIN_GAIN_ROOMS = 4
 #: ...nor below these absolute floors (units of the feature: m, degrees, m², ratios).
 ABS_SIGMA_FLOOR: dict[str, float] = {
     "tilt": 1.0,
@@ -382,7 +394,7 @@ def collect_scene_samples(
     """
     from ..errors import OntoDetectError
     from ..ontology import score_class
-    from ..pipeline import describe_cluster
+    from ..pipeline import describe_cluster, shelter_heights
     from ..segment import segment
 
     opts = dict(segment_options or {})
@@ -406,7 +418,8 @@ def collect_scene_samples(
     values: dict[ConstraintPath, list[float]] = {}
     used: dict[str, int] = {}
     skipped: dict[str, int] = {}
-    descriptions = [describe_cluster(c) for c in seg]
+    # Described as detect describes them, with what stands beside each cluster.
+    descriptions = [describe_cluster(c, float(h)) for c, h in zip(seg, shelter_heights(seg))]
     for g, gt in enumerate(gts):
         if not clusters or iou[:, g].max() < min_iou:
             skipped[gt.label] = skipped.get(gt.label, 0) + 1
@@ -467,6 +480,10 @@ class FitSettings:
     accept_ties : bool
         Also keep a group that changes no validation F1 (by default a change needs
         some evidence: it must raise one F1 and lower none).
+    min_gain_rooms : int
+        A group is kept only when F1 rises in at least this many calibration rooms
+        left out in turn and falls in none (:data:`MIN_GAIN_ROOMS`); with fewer
+        calibration rooms to leave out, nothing is validated and nothing changes.
     """
 
     prior_share: float = PRIOR_SIGMA_SHARE
@@ -477,6 +494,7 @@ class FitSettings:
     room_samples: int = ROOM_SAMPLES
     validate: bool = True
     accept_ties: bool = False
+    min_gain_rooms: int = MIN_GAIN_ROOMS
 
     def __post_init__(self) -> None:
         for name in ("prior_share", "prior_strength"):
@@ -487,13 +505,20 @@ class FitSettings:
                 raise InvalidParameterError(name, "a finite number >= 0", value)
         if not (isinstance(self.quantile, (int, float)) and 0.0 <= self.quantile < 0.5):
             raise InvalidParameterError("quantile", "a number in [0, 0.5)", self.quantile)
-        for name in ("min_samples", "min_rooms", "room_samples"):
+        for name in ("min_samples", "min_rooms", "room_samples", "min_gain_rooms"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise InvalidParameterError(name, "a positive integer", value)
         for name in ("validate", "accept_ties"):
             if not isinstance(getattr(self, name), bool):
                 raise InvalidParameterError(name, "True or False", getattr(self, name))
+
+    @property
+    def validation_rooms(self) -> int:
+        """Calibration rooms the nested check needs before it can accept any change."""
+        # Leaving one room out needs another to fit on, and the gain must show in
+        # min_gain_rooms of them.
+        return max(2, self.min_gain_rooms)
 
 
 def sigma_floor(prior: Any, feature: str, prior_share: float = PRIOR_SIGMA_SHARE) -> float:
@@ -922,12 +947,20 @@ class GroupDecision:
     f1_before, f1_after : dict of str to float
         Validation F1 per reported class and ``"overall"`` without and with the group
         (on top of the groups accepted before it), pooled over the validation rooms.
+    rooms_gained, rooms_lost : tuple of str
+        Left-out calibration rooms where some F1 rose with the group and fell in none
+        / where an F1 or the number of objects found fell.
+    reason : str
+        Why the group was accepted or rejected, in words.
     """
 
     group: ConstraintPath
     accepted: bool
     f1_before: dict[str, float]
     f1_after: dict[str, float]
+    rooms_gained: tuple[str, ...] = ()
+    rooms_lost: tuple[str, ...] = ()
+    reason: str = ""
 
     @property
     def name(self) -> str:
@@ -939,11 +972,26 @@ class GroupDecision:
             "accepted": self.accepted,
             "f1_before": self.f1_before,
             "f1_after": self.f1_after,
+            "rooms_gained": list(self.rooms_gained),
+            "rooms_lost": list(self.rooms_lost),
+            "reason": self.reason,
         }
 
 
 def _f1(tp: int, fp: int, fn: int) -> float:
     return 2 * tp / (2 * tp + fp + fn) if tp else 0.0
+
+
+def _room_sign(new: np.ndarray, old: np.ndarray) -> int:
+    """Whether one class's (TP, FP, FN) in one room got better (1), worse (-1) or neither.
+
+    F1 decides; when it ties, fewer false positives are better: with no true positive
+    F1 is 0 whatever the false alarms, and one fewer is still a gain.
+    """
+    f_new, f_old = _f1(*map(int, new)), _f1(*map(int, old))
+    if abs(f_new - f_old) > F1_TOLERANCE:
+        return 1 if f_new > f_old else -1
+    return int(np.sign(int(old[1]) - int(new[1])))
 
 
 def _detect_counts(
@@ -1016,14 +1064,25 @@ def select_groups(
     detect_options: Mapping[str, Any] | None = None,
     source: str | None = None,
 ) -> tuple[set[ConstraintPath], list[GroupDecision]]:
-    """Which groups of fitted constraints do not lower F1 on calibration rooms left out.
+    """Which groups of fitted constraints help calibration rooms left out, and hurt none.
 
     Every calibration room in turn is a validation room: the constraints are fitted
     (:func:`fit_constraints`) on the values of the other rooms, and its scenes are
     detected on again with the base ontology changed by a set of groups. Starting from
     no change, the groups that any fold changes are tried one by one in file order on
-    top of those accepted so far; a group is accepted when neither any reported class's
-    F1 nor the overall F1, pooled over all validation rooms, falls.
+    top of those accepted so far. A group is accepted when
+
+    - in no validation room does any reported class's F1, the overall F1 or the number
+      of objects found fall (nor, where F1 is 0 either way, do false positives rise);
+    - neither any class's F1 nor the overall F1 pooled over the validation rooms falls;
+    - the room gains in at least ``settings.min_gain_rooms`` validation rooms: some F1
+      rises (or, at equal F1, false positives fall). This is a one-sided sign test over
+      the rooms (see :data:`MIN_GAIN_ROOMS`): a gain seen in a single room rests on one
+      or two detections and says nothing about other rooms.
+
+    With ``settings.accept_ties`` the last rule is dropped (a change without evidence
+    is kept when it hurts nothing). With fewer validation rooms than
+    ``settings.validation_rooms`` nothing can be checked and nothing is accepted.
 
     Parameters
     ----------
@@ -1045,12 +1104,18 @@ def select_groups(
     -------
     accepted : set of group paths
     decisions : list of GroupDecision
-        One per group tried, in order. Empty when fewer than two rooms were measured
-        (nothing can be checked, so nothing is accepted).
+        One per group tried, in order. Empty when fewer than
+        ``settings.validation_rooms`` rooms can be left out (nothing can be checked,
+        so nothing is accepted; see :func:`validation_rooms`).
     """
     from ..ontology import parse_ontology
 
     settings = settings or FitSettings()
+    accepted: set[ConstraintPath] = set()
+    decisions: list[GroupDecision] = []
+    held_rooms = validation_rooms(room_values, scenes)
+    if len(held_rooms) < settings.validation_rooms:
+        return accepted, decisions
     base = parse_ontology(text, source)
     data = yaml.safe_load(text)
     classes = [c.label for c in base.classes if c.detect]
@@ -1058,9 +1123,7 @@ def select_groups(
     params = _detection_params(base, detect_options or {})
     rooms = sorted(room_values, key=_natural_key)
     folds = []
-    for held in rooms:
-        if len(rooms) < 2 or not scenes.get(held):
-            continue
+    for held in held_rooms:
         values: dict[ConstraintPath, list[float]] = {}
         counts: dict[ConstraintPath, int] = {}
         for r in rooms:
@@ -1078,8 +1141,10 @@ def select_groups(
     }
     candidates = sorted({constraint_group(p) for _, fits in folds for p in fits}, key=order.get)
 
-    def evaluate(chosen: set[ConstraintPath]) -> tuple[dict[str, float], list[dict[str, float]]]:
-        """F1 pooled over the validation rooms, and F1 in each of them."""
+    def evaluate(
+        chosen: set[ConstraintPath],
+    ) -> tuple[dict[str, float], list[dict[str, np.ndarray]]]:
+        """F1 pooled over the validation rooms, and TP, FP, FN in each of them."""
         total = {c: np.zeros(3, dtype=np.int64) for c in classes}
         per_fold = []
         for fold_scenes, fits in folds:
@@ -1091,13 +1156,7 @@ def select_groups(
                     fold[c] += v
             for c in classes:
                 total[c] += fold[c]
-            per_fold.append(
-                {
-                    **{c: _f1(*map(int, v)) for c, v in fold.items()},
-                    # Objects found: the held-out rooms lost recall, not precision.
-                    **{f"{c} found": float(v[0]) for c, v in fold.items()},
-                }
-            )
+            per_fold.append({**fold, "overall": sum(fold.values())})
         f1 = {c: _f1(*map(int, v)) for c, v in total.items()}
         f1["overall"] = _f1(*map(int, sum(total.values())))
         return f1, per_fold
@@ -1105,27 +1164,66 @@ def select_groups(
     def no_worse(new: Mapping[str, float], old: Mapping[str, float]) -> bool:
         return all(new[k] >= old[k] - F1_TOLERANCE for k in old)
 
-    accepted: set[ConstraintPath] = set()
-    decisions = []
-    if not folds:
-        return accepted, decisions
+    def room_change(new: Mapping[str, np.ndarray], old: Mapping[str, np.ndarray]) -> int:
+        """-1 if the room lost (an F1 or objects found fell), 1 if it gained, else 0."""
+        signs = [_room_sign(new[k], old[k]) for k in old]
+        # Objects found: the held-out rooms lost recall, not precision.
+        if min(signs) < 0 or any(new[c][0] < old[c][0] for c in classes):
+            return -1
+        return int(max(signs) > 0)
+
     current, current_folds = evaluate(accepted)
     with progress("Checking calibrated groups", total=len(candidates)) as advance:
         for group in candidates:
             trial, trial_folds = evaluate(accepted | {group})
-            # Pooled and room by room: a change that helps one room and hurts another
-            # depends on the rooms, not on the class.
-            ok = no_worse(trial, current) and all(
-                no_worse(t, c) for t, c in zip(trial_folds, current_folds)
-            )
-            if ok and not settings.accept_ties:
-                ok = any(trial[k] > current[k] + F1_TOLERANCE for k in current)
-            decisions.append(GroupDecision(group, ok, current, trial))
+            # Room by room: a change that helps one room and hurts another depends on
+            # the rooms, not on the class.
+            change = [room_change(t, c) for t, c in zip(trial_folds, current_folds)]
+            lost = tuple(r for r, d in zip(held_rooms, change) if d < 0)
+            gained = tuple(r for r, d in zip(held_rooms, change) if d > 0)
+            if lost:
+                ok, reason = False, f"lowers F1 or objects found in {', '.join(lost)}"
+            elif not no_worse(trial, current):
+                ok, reason = False, "lowers a pooled F1"
+            elif settings.accept_ties:
+                ok, reason = True, "lowers no F1"
+            elif len(gained) >= settings.min_gain_rooms:
+                ok, reason = True, f"raises F1 in {', '.join(gained)}, lowers none"
+            elif gained:
+                ok, reason = (
+                    False,
+                    (
+                        f"raises F1 only in {', '.join(gained)}: needs a gain in "
+                        f"{settings.min_gain_rooms} rooms"
+                    ),
+                )
+            else:
+                ok, reason = False, "changes no F1"
+            decisions.append(GroupDecision(group, ok, current, trial, gained, lost, reason))
             if ok:
                 accepted.add(group)
                 current, current_folds = trial, trial_folds
             advance(1)
     return accepted, decisions
+
+
+def validation_rooms(
+    room_values: Mapping[str, Any], scenes: Mapping[str, Sequence[ValidationScene]]
+) -> list[str]:
+    """The calibration rooms the nested check can leave out in turn, in natural order.
+
+    A room needs scenes to detect on and at least one other measured room to fit on.
+
+    Examples
+    --------
+    >>> validation_rooms({"scene0001": {}, "scene0002": {}}, {"scene0002": ["s"]})
+    ['scene0002']
+    >>> validation_rooms({"scene0001": {}}, {"scene0001": ["s"]})
+    []
+    """
+    if len(room_values) < 2:
+        return []
+    return [r for r in sorted(room_values, key=_natural_key) if scenes.get(r)]
 
 
 # -- the whole procedure -------------------------------------------------------------------
@@ -1152,7 +1250,12 @@ class CalibrationResult:
     settings : FitSettings
     decisions : list of GroupDecision
         The nested check of every group of fitted constraints, in order (empty when
-        ``settings.validate`` is off or fewer than two rooms were measured).
+        ``settings.validate`` is off or too few rooms could be left out).
+    check : str
+        What the nested check did, in one sentence (says so when too few calibration
+        rooms left nothing to validate and the original was kept).
+    validation_rooms : list of str
+        The calibration rooms the nested check left out in turn (none when too few).
     """
 
     text: str
@@ -1167,6 +1270,15 @@ class CalibrationResult:
     failed: list[str] = field(default_factory=list)
     settings: FitSettings = field(default_factory=FitSettings)
     decisions: list[GroupDecision] = field(default_factory=list)
+    check: str = ""
+    validation_rooms: list[str] = field(default_factory=list)
+
+    @property
+    def too_few_rooms(self) -> bool:
+        """True when the nested check was asked for but had too few rooms to leave out."""
+        return self.settings.validate and len(self.validation_rooms) < (
+            self.settings.validation_rooms
+        )
 
     def comparison(self) -> list[dict[str, Any]]:
         """Per class and overall: precision, recall and F1 on the held-out scenes, before/after."""
@@ -1202,6 +1314,8 @@ class CalibrationResult:
             "failed": self.failed,
             "constraints": [f.to_dict() for f in self.fits],
             "nested_check": [d.to_dict() for d in self.decisions],
+            "check": self.check,
+            "validation_rooms": self.validation_rooms,
             "held_out": self.comparison(),
             "criterion": "point IoU >= 0.25",
         }
@@ -1325,14 +1439,11 @@ def calibrate_dataset(
             detect_options=opts,
             source=source,
         )
+    left_out = validation_rooms(room_values, room_scenes) if settings.validate else []
+    # A lone room cannot be left out (nothing to fit on), but it is the room to count.
+    check = _describe_check(settings, left_out or sorted(room_scenes), decisions)
     name = Path(path).name or str(path)
     counts = ", ".join(f"{n} {c}" for c, n in sorted(used.items())) or "none"
-    check = (
-        f"kept {len(groups)} of {len(decisions)} groups of constraints that did not lower F1 "
-        "on calibration rooms left out in turn"
-        if groups is not None
-        else "no nested check"
-    )
     comment = (
         f"Calibrated by 'ontodetect calibrate' from {source} on {name}:\n"
         f"{sum(used.values())} objects ({counts}) in {len(parts.calibration)} scenes;\n"
@@ -1341,7 +1452,7 @@ def calibrate_dataset(
         f"a room counting as at most {settings.room_samples} objects; "
         f"sigma >= {settings.prior_share:g} x the original, bounds from quantile "
         f"{settings.quantile:g}, at least {settings.min_samples} values from "
-        f"{settings.min_rooms} rooms; {check}.\n"
+        f"{settings.min_rooms} rooms; nested check: {check}\n"
         "Only numbers changed; the comments of the original file are not kept."
     )
     new_text, fits = calibrate_ontology(
@@ -1383,4 +1494,32 @@ def calibrate_dataset(
         failed,
         settings,
         decisions,
+        check,
+        left_out if len(left_out) >= settings.validation_rooms else [],
+    )
+
+
+def _describe_check(
+    settings: FitSettings, rooms: Sequence[str], decisions: Sequence[GroupDecision]
+) -> str:
+    """One sentence on what the nested check did."""
+    if not settings.validate:
+        return "off (--no-validate): every fitted constraint is written."
+    need = settings.validation_rooms
+    if len(rooms) < need:
+        return (
+            f"NOT POSSIBLE, only {len(rooms)} calibration room(s) to leave out in turn and "
+            f"at least {need} are needed (a gain must show in {settings.min_gain_rooms} "
+            "rooms); nothing could be validated, so the file keeps the original values."
+        )
+    kept = [d for d in decisions if d.accepted]
+    rule = (
+        "lower no F1"
+        if settings.accept_ties
+        else f"raise F1 in at least {settings.min_gain_rooms} rooms and lower none"
+    )
+    return (
+        f"{len(rooms)} calibration rooms left out in turn; kept {len(kept)} of "
+        f"{len(decisions)} fitted groups, those that {rule}"
+        + (" (none: the file keeps the original values)." if not kept else ".")
     )
