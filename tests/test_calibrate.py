@@ -512,3 +512,15 @@ def test_a_single_calibration_room_keeps_the_original_and_says_so(tiny_rooms, tm
     assert doc["validation_rooms"] == [] and doc["nested_check"] == []
     assert "NOT POSSIBLE" in doc["check"]
     assert "NOT POSSIBLE" in out.read_text().split("format:")[0]  # the file's header says so
+
+
+def test_softness_of_a_bound_only_loosens():
+    from ontodetect.evaluation import fit_gaussian
+    from ontodetect.ontology import Gaussian
+
+    prior = Gaussian(6.0, 5.0, "max")
+    tight = fit_gaussian(prior, [1.0, 1.2, 0.8, 1.1, 0.9] * 4, "tilt", prior_strength=0)
+    assert tight.side == "max" and tight.mean == pytest.approx(6.0)
+    assert tight.sigma == pytest.approx(5.0)  # values well inside: no sharper fall-off
+    wide = fit_gaussian(prior, [2.0, 9.0, 15.0, 4.0, 12.0], "tilt", prior_strength=0)
+    assert wide.mean > 6.0 and wide.sigma > 5.0

@@ -23,7 +23,8 @@ so with few objects or rooms the estimate stays near the prior:
   expected gap between the extreme of ``n`` samples and the end of their support,
   ``range / (n − 1)``, and blended with the prior's end by the same ``w``. An end thus
   never moves inside what the samples support; ``soft`` (where the file has it) blends
-  the prior's softness with the sample spread, with the same floors.
+  the prior's softness with the sample spread, with the same floors, and like the bound
+  only ever loosens.
 
 Constraints with fewer than :data:`MIN_SAMPLES` values, or with values from fewer than
 :data:`MIN_ROOMS` rooms (rescans of a room measure the same objects again), keep their
@@ -602,7 +603,10 @@ def fit_gaussian(
         return Gaussian(prior.mean + w * shift, max(math.sqrt(var * predictive), floor))
     if prior.side not in ("min", "max", "plateau"):
         return prior  # a form this version does not know how to fit
-    sigma = max(math.sqrt(((1.0 - w) * prior.sigma**2 + w * spread) * predictive), floor)
+    # The softness of a bound loosens like the bound: values well inside it say nothing
+    # of how sharply objects beyond it fall off.
+    sigma = max(math.sqrt(((1.0 - w) * prior.sigma**2 + w * spread) * predictive), floor,
+                prior.sigma)
     low = float(np.quantile(x, quantile))
     high = float(np.quantile(x, 1.0 - quantile))
     # The support of n samples reaches beyond their extremes by about range / (n - 1)
