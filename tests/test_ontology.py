@@ -13,6 +13,7 @@ from ontodetect.ontology import (
     Gaussian,
     builtin_ontology,
     class_priors,
+    continuations,
     missing_factor,
     parse_ontology,
     room_distribution,
@@ -122,6 +123,41 @@ def test_occluded_backrest_is_penalised_not_fatal():
     assert s.assignment["backrest"] is None
     assert s.factors["backrest"]["missing"] == pytest.approx(0.12)
     assert s.likelihood > 0.01
+
+
+def test_pieces_of_one_top_are_explained_together():
+    o = builtin_ontology()
+    whole = high_table()
+    half = P(tilt=1, height=0.74, length=0.7, width=0.8)
+    split = cluster([half, P(tilt=1, height=0.75, length=0.7, width=0.8, cx=0.7)],
+                    {(0, 1): R(angle=0.5, distance=0.01)}, length=1.45)
+    assert continuations(split) == [frozenset({1}), frozenset({0})]
+    # A step in height or a gap between them: two surfaces.
+    apart = cluster(split.planes, {(0, 1): R(angle=0.5, distance=0.3)}, length=1.45)
+    assert continuations(apart) == [frozenset(), frozenset()]
+    t_split = score_class(o["table"], split)
+    assert t_split.assignment["top"] in (0, 1)
+    assert not any(c.feature == "extra_plane" for c in t_split.constraints)
+    assert score_class(o["table"], apart).log_likelihood < t_split.log_likelihood
+    assert score_cluster(split, o).best == score_cluster(whole, o).best == "table"
+
+
+def test_a_second_large_surface_costs_a_table_more_than_clutter():
+    o = builtin_ontology()
+    table = o["table"]
+    assert table.extra_surface == pytest.approx(0.5)
+    top = P(tilt=1, height=0.72, length=1.6, width=0.8)
+    seat = P(tilt=2, height=0.42, length=1.5, width=0.6, cy=0.7)  # a sofa seat beside it
+    book = P(tilt=2, height=0.76, length=0.3, width=0.22)  # clutter on the top
+    with_seat = score_class(table, cluster([top, seat], length=1.7))
+    with_book = score_class(table, cluster([top, book], length=1.7))
+    extra = {c.feature: c.factor for c in with_seat.constraints if c.part == "cluster"}
+    assert extra["extra_plane"] == pytest.approx(0.5)
+    assert with_book.likelihood > with_seat.likelihood
+    text = ("format: ontodetect.ontology/1\nclasses:\n  thing:\n    extra_surface: 0\n"
+            "    parts: {top: {tilt: {max: 5}}}\n")
+    with pytest.raises(InvalidOntologyError, match=r"extra_surface"):
+        parse_ontology(text, "x.yaml")
 
 
 def backrest_behind_desk(*, bottom=0.5, shelter=0.74):

@@ -134,6 +134,9 @@ class ObjectClass:
     detect: bool = True
     matches: tuple[str, ...] = ()
     extra_plane: float = 1.0
+    #: Factor for an unexplained large horizontal plane (a second surface, not clutter);
+    #: ``None``: the same as ``extra_plane``.
+    extra_surface: float | None = None
 
     def part(self, name: str) -> Part:
         for p in self.parts:
@@ -416,7 +419,7 @@ def _prior(spec: Any, path: tuple[Any, ...]) -> tuple[Any, float | None, float |
 def _class(name: str, spec: Any, path: tuple[Any, ...]) -> ObjectClass:
     spec = _mapping(spec, path)
     _only(spec, {"label", "description", "detect", "matches", "prior", "cluster", "parts",
-                 "relations", "labeling", "extra_plane"}, path)
+                 "relations", "labeling", "extra_plane", "extra_surface"}, path)
     parts_spec = _mapping(spec.get("parts"), path + ("parts",))
     if not parts_spec:
         raise _Problem(path + ("parts",), "a class needs at least one part")
@@ -440,6 +443,12 @@ def _class(name: str, spec: Any, path: tuple[Any, ...]) -> ObjectClass:
     extra = _number(spec.get("extra_plane", 1.0), path + ("extra_plane",), "a probability")
     if not 0.0 < extra <= 1.0:
         raise _Problem(path + ("extra_plane",), f"expected a probability in (0, 1], got {extra:g}")
+    surface = spec.get("extra_surface")
+    if surface is not None:
+        surface = _number(surface, path + ("extra_surface",), "a probability")
+        if not 0.0 < surface <= 1.0:
+            raise _Problem(path + ("extra_surface",),
+                           f"expected a probability in (0, 1], got {surface:g}")
     label = spec.get("label", name)
     if not isinstance(label, str) or not label:
         raise _Problem(path + ("label",), f"expected a name, got {label!r}")
@@ -448,7 +457,7 @@ def _class(name: str, spec: Any, path: tuple[Any, ...]) -> ObjectClass:
         parts=parts, relations=relations, cluster=cluster,
         labeling=_labeling(spec.get("labeling"), path + ("labeling",)),
         prior_rooms=rooms, prior_indoor=indoor, prior_outdoor=outdoor, detect=detect,
-        matches=tuple(matches), extra_plane=extra,
+        matches=tuple(matches), extra_plane=extra, extra_surface=surface,
     )
 
 

@@ -39,6 +39,7 @@ __all__ = [
     "ClusterDescription",
     "ClusterScores",
     "ConstraintValue",
+    "continuations",
     "missing_factor",
     "plane_feature",
     "score_class",
@@ -56,6 +57,15 @@ NONE = "none"
 #: A plane no part explains costs the full ``extra_plane`` factor from this area up (m²);
 #: smaller patches (a caster, a strip of a frame) cost proportionally less.
 EXTRA_PLANE_AREA = 0.08
+#: Horizontal planes (tilt below ``CONTINUE_TILT``, degrees) within ``CONTINUE_STEP`` (m)
+#: of each other in height and ``CONTINUE_GAP`` (m) apart are pieces of one surface (a top
+#: or a cushioned seat MSAC found in several patches): the part that takes one explains all.
+CONTINUE_TILT = 10.0
+CONTINUE_STEP = 0.05
+CONTINUE_GAP = 0.1
+#: An unexplained horizontal plane of at least this area (m²) is a second surface, which
+#: costs a class's ``extra_surface`` (a seat beside a "table top" is not clutter on it).
+SURFACE_AREA = 0.25
 #: A cluster whose lowest point is this high above the floor (m) does not stand on it:
 #: something in front may hide its lower part ...
 LIFTED_BOTTOM = 0.2
@@ -182,6 +192,16 @@ def _plane_weights(planes: Sequence[Any]) -> np.ndarray:
     return np.array([min(1.0, float(p.area) / EXTRA_PLANE_AREA) for p in planes])
 
 
+def _extra_log(cls: ObjectClass, planes: Sequence[Any]) -> np.ndarray:
+    """(planes,) log-factor each plane costs when no part of ``cls`` explains it."""
+    out = math.log(cls.extra_plane) * _plane_weights(planes)
+    if cls.extra_surface is not None:
+        surface = np.array([float(p.tilt) < CONTINUE_TILT and float(p.area) >= SURFACE_AREA
+                            for p in planes], dtype=bool)
+        out[surface] = math.log(cls.extra_surface)
+    return out
+
+
 def _unary(cls: ObjectClass, desc: ClusterDescription) -> np.ndarray:
     """(parts, planes) log-factor of each plane as each part, relations left out."""
     out = np.zeros((len(cls.parts), len(desc.planes)))
@@ -190,6 +210,24 @@ def _unary(cls: ObjectClass, desc: ClusterDescription) -> np.ndarray:
             values = np.array([plane_feature(pl, feature) for pl in desc.planes])
             out[p] += g.log(values) if len(values) else 0.0
     return out
+
+
+def continuations(desc: ClusterDescription) -> list[frozenset[int]]:
+    """For every plane, the other planes of the cluster that continue its surface.
+
+    Only horizontal surfaces: two flat patches at one height that touch are one top
+    or one seat split by clutter, a seam or a gap in the scan.
+    """
+    planes = desc.planes
+    flat = [float(p.tilt) < CONTINUE_TILT for p in planes]
+    out: list[set[int]] = [set() for _ in planes]
+    for (i, j), rel in desc.relations.items():
+        if not (flat[i] and flat[j]) or float(rel.distance) > CONTINUE_GAP:
+            continue
+        if abs(float(planes[i].height) - float(planes[j].height)) <= CONTINUE_STEP:
+            out[i].add(j)
+            out[j].add(i)
+    return [frozenset(x) for x in out]
 
 
 def _height_span(g: Gaussian) -> tuple[float, float]:
@@ -238,14 +276,16 @@ def score_class(cls: ObjectClass, desc: ClusterDescription, log_prior: float = 0
 
     # Planes no part explains cost ``extra_plane`` each, weighted by their size: a stool
     # is not a chair with a back, but a chair is still a chair with a caster in view.
-    plane_log_extra = math.log(cls.extra_plane) * _plane_weights(desc.planes)
+    plane_log_extra = _extra_log(cls, desc.planes)
     all_extra = float(plane_log_extra.sum())
+    more = continuations(desc)
     best_log, best_assign = -math.inf, None
     for combo in itertools.product(*candidates):
         used = [c for c in combo if c is not None]
         if len(used) != len(set(used)):
             continue
-        total = all_extra - float(sum(plane_log_extra[c] for c in used))
+        explained = set(used).union(*(more[c] for c in used))
+        total = all_extra - float(sum(plane_log_extra[c] for c in explained))
         for p, c in enumerate(combo):
             total += unary[p, c] if c is not None else math.log(missing[p])
         if total <= best_log:
@@ -290,8 +330,9 @@ def score_class(cls: ObjectClass, desc: ClusterDescription, log_prior: float = 0
     cluster_log = 0.0
     cluster_factor = 1.0
     used = {c for c in best_assign if c is not None}
+    used = used.union(*(more[c] for c in used))
     unexplained = [k for k in range(len(desc.planes)) if k not in used]
-    if cls.extra_plane < 1.0 and unexplained:
+    if unexplained and (cls.extra_plane < 1.0 or cls.extra_surface is not None):
         f = math.exp(float(sum(plane_log_extra[k] for k in unexplained)))
         cluster_factor *= f
         constraints.append(ConstraintValue("cluster", "extra_plane", "cluster",
