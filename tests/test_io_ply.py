@@ -369,25 +369,6 @@ def test_matches_real_mesh_layout_read_by_open3d(tmp_path, rng):
     np.testing.assert_array_equal(np.asarray(ref.points), c.xyz)
 
 
-def test_threaded_chunked_decode_matches_single_pass(tmp_path, rng, monkeypatch):
-    n = 1000
-    cloud = point_cloud(
-        rng.normal(size=(n, 3)),
-        rgb=rng.integers(0, 256, (n, 3)),
-        fields={"label": rng.integers(-5, 5, n).astype(np.int16)},
-    )
-    f = write_ply(tmp_path / "t.ply", cloud, dtype="float32")
-    single = read_ply(f)
-    # Tiny chunks and blocks force every boundary case and the two-thread path.
-    monkeypatch.setattr(_ply, "CHUNK_ROWS", 37)
-    monkeypatch.setattr(_ply, "BLOCK_ROWS", 111)
-    monkeypatch.setattr(_ply, "PARALLEL_MIN_ROWS", 100)
-    monkeypatch.setattr(_ply, "READ_THREADS", 2)
-    monkeypatch.setattr(_ply.os, "cpu_count", lambda: 2)
-    threaded = read_ply(f)
-    assert_same_cloud(threaded, single)
-
-
 def test_fast_assembly_equals_point_cloud(rng):
     xyz = rng.normal(size=(50, 3))
     rgb = rng.integers(0, 256, (50, 3), dtype=np.uint8)

@@ -348,7 +348,7 @@ def _read_binary(
     colors = _unpack_rgb(cloud.fields[packed_name])
     rest = {k: v for k, v in cloud.fields.items() if k != packed_name}
     return PointCloud(
-        cloud.xyz, _freeze(colors), cloud.normals, MappingProxyType(rest), cloud.index, cloud.meta
+        cloud.xyz, _freeze(colors), cloud.normals, MappingProxyType(rest), cloud._index, cloud.meta
     )
 
 

@@ -10,9 +10,10 @@ property as a named field (``label``, ``instance``, ``intensity``,
 other element, list properties included, are skipped: a mesh's vertices are its
 points.
 
-Binary vertex data is decoded through a small cache-resident buffer straight
-into the final arrays (float64 coordinates, uint8 colours), on two threads for
-large files: the file's bytes are never held in memory a second time.
+Binary vertex data is decoded chunk by chunk through a small cache-resident
+buffer straight into the final arrays (float64 coordinates, uint8 colours), on
+two threads for large files (:mod:`._chunks`): the file's bytes are never held in
+memory a second time.
 
 The helpers here (named-column planning, chunked record decoding, ASCII token
 tables, cloud assembly) are shared with the PCD and NumPy readers.
@@ -25,7 +26,6 @@ import os
 import re
 import struct
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
@@ -38,6 +38,7 @@ from .._progress import progress
 from ..cloud import RESERVED_FIELDS, PointCloud, point_cloud
 from ..errors import CorruptFileError, InvalidParameterError, ReadError, WriteError
 from ._atomic import atomic_write
+from ._chunks import Copy, Span, read_records
 
 __all__ = ["read_ply", "write_ply"]
 
@@ -45,14 +46,6 @@ __all__ = ["read_ply", "write_ply"]
 HEADER_MAX_BYTES = 1 << 20
 #: Bytes read at a time while looking for the end of a header.
 HEADER_CHUNK_BYTES = 1 << 16
-#: Records decoded per step: the scratch buffer stays in the CPU cache.
-CHUNK_ROWS = 1 << 16
-#: Records per unit of work handed to a thread (and per progress step).
-BLOCK_ROWS = 1 << 20
-#: Below this many records a second thread costs more than it saves.
-PARALLEL_MIN_ROWS = 2 << 20
-#: Threads used to decode large binary files (the copies release the GIL).
-READ_THREADS = 2
 #: Rows encoded per write call.
 WRITE_CHUNK_ROWS = 1 << 20
 #: Characters of an offending value quoted in error messages.
@@ -203,7 +196,10 @@ def assemble_cloud(
     what :func:`~ontodetect.cloud.point_cloud` would (float64 C-ordered
     coordinates, numeric fields of the right length, names the cloud does not
     reserve), and skipping its per-row finiteness test saves more time than the
-    whole binary decode. Anything else goes through ``point_cloud(copy=False)``,
+    whole binary decode. uint8 colours are kept as they are, strided or not
+    (the binary decoder gives the first three columns of an (n, 4) block). The
+    row index is left for the cloud to build when first asked for (one more
+    8-byte value a point). Anything else goes through ``point_cloud(copy=False)``,
     which drops non-finite points (keeping their file rows in ``index``) and
     converts colours. Problems with the content become :class:`CorruptFileError`.
     """
@@ -230,10 +226,10 @@ def assemble_cloud(
     if fast:
         return PointCloud(
             xyz=_frozen(xyz),
-            rgb=None if rgb is None else _frozen(np.ascontiguousarray(rgb)),
+            rgb=None if rgb is None else _frozen(rgb),
             normals=None if normals is None else _frozen(normals),
             fields=MappingProxyType({k: _frozen(v) for k, v in fields.items()}),
-            index=_frozen(np.arange(n, dtype=np.int64)),
+            index=None,  # every row kept: the cloud builds arange(n) only if asked
             meta=MappingProxyType(meta),
         )
     try:
@@ -325,93 +321,19 @@ def parse_column(
     raise CorruptFileError(path, f"{what} holds values that cannot be read as {dtype.name}")
 
 
-def read_records(
-    path: Path,
-    offset: int,
-    record: np.dtype,
-    count: int,
-    copies: Sequence[tuple[NDArray[Any], int | None, str]],
-    xyz: NDArray[np.float64],
-) -> bool:
-    """Decode ``count`` fixed-size binary records from ``path`` into the final arrays.
-
-    Parameters
-    ----------
-    path : Path
-        The file; the records start at byte ``offset``.
-    record : numpy.dtype
-        Structured type of one record (only the fields to keep need be named).
-    copies : sequence of (array, column or None, field name)
-        Where every field goes: ``array[rows, column] = records[name]`` (or
-        ``array[rows] = ...`` when column is None); casts happen in the copy.
-    xyz : (count, 3) float64
-        The coordinate array among the targets, checked for NaN/Inf on the way.
-
-    Returns
-    -------
-    bool
-        Whether every coordinate is finite.
-
-    Notes
-    -----
-    Records go through a small buffer that stays in the CPU cache, so the bytes
-    are touched once and never held twice; large files are split into blocks
-    decoded on :data:`READ_THREADS` threads.
-    """
-    size = record.itemsize
-
-    def block(lo: int, hi: int) -> bool:
-        buf = np.empty(min(CHUNK_ROWS, hi - lo) * size, dtype=np.uint8)
-        view = memoryview(buf)
-        finite = True
-        with open(path, "rb", buffering=0) as fh:
-            fh.seek(offset + lo * size)
-            for start in range(lo, hi, CHUNK_ROWS):
-                m = min(CHUNK_ROWS, hi - start)
-                want = m * size
-                got = 0
-                while got < want:
-                    k = fh.readinto(view[got:want])
-                    if not k:
-                        raise CorruptFileError(
-                            path, f"ends inside the data at byte {offset + start * size + got}"
-                        )
-                    got += k
-                recs = buf[:want].view(record)
-                # Signalling NaNs in float32 data raise "invalid" when widened.
-                with np.errstate(invalid="ignore", over="ignore"):
-                    for dest, col, name in copies:
-                        if col is None:
-                            dest[start : start + m] = recs[name]
-                        else:
-                            dest[start : start + m, col] = recs[name]
-                finite = finite and bool(np.isfinite(xyz[start : start + m]).all())
-        return finite
-
-    blocks = [(lo, min(lo + BLOCK_ROWS, count)) for lo in range(0, count, BLOCK_ROWS)]
-    finite = True
-    try:
-        with progress(f"Reading {path.name}", total=count) as advance:
-            threads = min(READ_THREADS, os.cpu_count() or 1)
-            if count >= PARALLEL_MIN_ROWS and threads > 1:
-                with ThreadPoolExecutor(threads) as pool:
-                    futures = [pool.submit(block, lo, hi) for lo, hi in blocks]
-                    for future, (lo, hi) in zip(futures, blocks):
-                        finite = future.result() and finite
-                        advance(hi - lo)
-            else:
-                for lo, hi in blocks:
-                    finite = block(lo, hi) and finite
-                    advance(hi - lo)
-    except OSError as exc:
-        raise ReadError(path, f"cannot read ({exc.strerror or exc})") from exc
-    return finite
-
-
 def _xyz_names(path: Path, plan: ColumnPlan) -> tuple[str, str, str]:
     if plan.xyz is None:
         raise CorruptFileError(path, "has no x, y and z columns")
     return plan.xyz
+
+
+def _packed_colours(record: np.dtype, names: Sequence[str]) -> int | None:
+    """Offset of the red byte when red, green and blue are consecutive uint8 fields."""
+    fields = [record.fields[n] for n in names]
+    start = fields[0][1]
+    if all(f[0] == np.uint8 and f[1] == start + i for i, f in enumerate(fields)):
+        return int(start)
+    return None
 
 
 def cloud_from_records(
@@ -422,17 +344,32 @@ def cloud_from_records(
     count: int,
     meta: Mapping[str, Any],
     on_nonfinite: str,
+    *,
+    chunk_rows: int | None = None,
+    threads: int | None = None,
 ) -> PointCloud:
-    """Decode a block of binary records laid out by ``record`` into a cloud."""
+    """Decode a block of binary records laid out by ``record`` into a cloud.
+
+    ``chunk_rows`` and ``threads`` go to :func:`~ontodetect.io._chunks.read_records`
+    (their defaults suit large files; tests pass tiny chunks).
+    """
     xyz = np.empty((count, 3), dtype=np.float64)
-    copies: list[tuple[NDArray[Any], int | None, str]] = [
-        (xyz, i, name) for i, name in enumerate(_xyz_names(path, plan))
-    ]
+    copies: list[Copy] = [(xyz, i, name) for i, name in enumerate(_xyz_names(path, plan))]
     rgb = normals = None
     if plan.rgb is not None:
-        kind = np.result_type(*(record[n].newbyteorder("=") for n in plan.rgb))
-        rgb = np.empty((count, 3), dtype=kind)
-        copies += [(rgb, i, name) for i, name in enumerate(plan.rgb)]
+        start = _packed_colours(record, plan.rgb)
+        if start is not None:
+            # One 4-byte copy a point instead of three 1-byte ones, which cost
+            # nearly as much as casting the coordinates: the colours are the
+            # first three columns of an (n, 4) block whose last one holds the
+            # byte after blue (alpha, often).
+            block = np.empty((count, 4), dtype=np.uint8)
+            rgb = block[:, :3]
+            copies.append((block.view("V4").reshape(count), None, Span(start, np.dtype("V4"))))
+        else:
+            kind = np.result_type(*(record[n].newbyteorder("=") for n in plan.rgb))
+            rgb = np.empty((count, 3), dtype=kind)
+            copies += [(rgb, i, name) for i, name in enumerate(plan.rgb)]
     if plan.normals is not None:
         normals = np.empty((count, 3), dtype=np.float64)
         copies += [(normals, i, name) for i, name in enumerate(plan.normals)]
@@ -442,7 +379,9 @@ def cloud_from_records(
         base, shape = (sub.base, sub.shape) if sub.shape else (sub, ())
         fields[dest] = np.empty((count, *shape), dtype=base.newbyteorder("="))
         copies.append((fields[dest], None, src))
-    finite = read_records(path, offset, record, count, copies, xyz)
+    finite = read_records(
+        path, offset, record, count, copies, xyz, chunk_rows=chunk_rows, threads=threads
+    )
     return assemble_cloud(
         path,
         xyz,
