@@ -339,21 +339,25 @@ def _constraints(spec: dict[str, Any], allowed: Mapping[str, str], path: tuple[A
     return out
 
 
+def _probability(spec: Mapping[str, Any], key: str, path: tuple[Any, ...],
+                 default: float | None = None) -> float | None:
+    """``spec[key]`` as a probability in (0, 1], or ``default`` when the key is absent."""
+    value = spec.get(key, default)
+    if value is None:
+        return None
+    value = _number(value, path + (key,), "a probability")
+    if not 0.0 < value <= 1.0:
+        raise _Problem(path + (key,), f"expected a probability in (0, 1], got {value:g}")
+    return value
+
+
 def _part(name: str, spec: Any, path: tuple[Any, ...]) -> Part:
     spec = _mapping(spec, path)
     required = spec.get("required", True)
     if not isinstance(required, bool):
         raise _Problem(path + ("required",), f"expected true or false, got {required!r}")
-    missing = spec.get("missing", DEFAULT_MISSING[required])
-    missing = _number(missing, path + ("missing",), "a probability")
-    if not 0.0 < missing <= 1.0:
-        raise _Problem(path + ("missing",), f"expected a probability in (0, 1], got {missing:g}")
-    occluded = spec.get("occluded")
-    if occluded is not None:
-        occluded = _number(occluded, path + ("occluded",), "a probability")
-        if not 0.0 < occluded <= 1.0:
-            raise _Problem(path + ("occluded",),
-                           f"expected a probability in (0, 1], got {occluded:g}")
+    missing = _probability(spec, "missing", path, DEFAULT_MISSING[required])
+    occluded = _probability(spec, "occluded", path)
     constraints = _constraints(spec, PART_FEATURES, path,
                                {"required", "missing", "occluded", "description"})
     return Part(name=name, constraints=constraints, required=required, missing=missing,
@@ -440,15 +444,8 @@ def _class(name: str, spec: Any, path: tuple[Any, ...]) -> ObjectClass:
         matches = [matches]
     if not isinstance(matches, list) or not all(isinstance(m, str) for m in matches):
         raise _Problem(path + ("matches",), f"expected a list of class names, got {matches!r}")
-    extra = _number(spec.get("extra_plane", 1.0), path + ("extra_plane",), "a probability")
-    if not 0.0 < extra <= 1.0:
-        raise _Problem(path + ("extra_plane",), f"expected a probability in (0, 1], got {extra:g}")
-    surface = spec.get("extra_surface")
-    if surface is not None:
-        surface = _number(surface, path + ("extra_surface",), "a probability")
-        if not 0.0 < surface <= 1.0:
-            raise _Problem(path + ("extra_surface",),
-                           f"expected a probability in (0, 1], got {surface:g}")
+    extra = _probability(spec, "extra_plane", path, 1.0)
+    surface = _probability(spec, "extra_surface", path)
     label = spec.get("label", name)
     if not isinstance(label, str) or not label:
         raise _Problem(path + ("label",), f"expected a name, got {label!r}")
