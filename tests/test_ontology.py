@@ -142,6 +142,30 @@ def test_pieces_of_one_top_are_explained_together():
     assert score_cluster(split, o).best == score_cluster(whole, o).best == "table"
 
 
+@dataclass(frozen=True)
+class Leaning(P):  # a plane leaning back about the x axis, its normal tilted by ``tilt``
+    @property
+    def normal(self):
+        t = math.radians(self.tilt)
+        return np.array([0.0, -math.sin(t), math.cos(t)])
+
+
+def test_pieces_of_one_backrest_are_explained_together():
+    seat = P(tilt=2, height=0.46, length=0.45, width=0.42)
+    left = Leaning(tilt=75, height=0.8, length=0.22, width=0.4, cx=-0.12, cy=0.2)
+    right = Leaning(tilt=75, height=0.8, length=0.22, width=0.4, cx=0.12, cy=0.2)
+    behind = Leaning(tilt=75, height=0.8, length=0.22, width=0.4, cx=0.12, cy=0.35)
+    rel = R(angle=87, distance=0.02)
+    one = cluster([seat, left, right], {(0, 1): rel, (0, 2): rel, (1, 2): R(0.0, 0.01)},
+                  length=0.55)
+    two = cluster([seat, left, behind], {(0, 1): rel, (0, 2): rel, (1, 2): R(0.0, 0.01)},
+                  length=0.55)
+    assert continuations(one)[1] == frozenset({2})
+    assert continuations(two)[1] == frozenset()  # parallel, but 14 cm behind: another surface
+    chair = builtin_ontology()["chair"]
+    assert score_class(chair, one).log_likelihood > score_class(chair, two).log_likelihood
+
+
 def test_a_second_large_surface_costs_a_table_more_than_clutter():
     o = builtin_ontology()
     table = o["table"]

@@ -57,12 +57,15 @@ NONE = "none"
 #: A plane no part explains costs the full ``extra_plane`` factor from this area up (m²);
 #: smaller patches (a caster, a strip of a frame) cost proportionally less.
 EXTRA_PLANE_AREA = 0.08
-#: Horizontal planes (tilt below ``CONTINUE_TILT``, degrees) within ``CONTINUE_STEP`` (m)
-#: of each other in height and ``CONTINUE_GAP`` (m) apart are pieces of one surface (a top
-#: or a cushioned seat MSAC found in several patches): the part that takes one explains all.
-CONTINUE_TILT = 10.0
+#: Planes whose normals differ by less than ``CONTINUE_ANGLE`` (degrees), whose centroids
+#: are within ``CONTINUE_STEP`` (m) of each other along the normal and which come within
+#: ``CONTINUE_GAP`` (m) are pieces of one surface (a top, a seat or a backrest MSAC found
+#: in several patches): the part that takes one explains all.
+CONTINUE_ANGLE = 10.0
 CONTINUE_STEP = 0.05
 CONTINUE_GAP = 0.1
+#: Planes tilted less than this (degrees) are flat: candidates for a second surface.
+CONTINUE_TILT = 10.0
 #: An unexplained horizontal plane of at least this area (m²) is a second surface, which
 #: costs a class's ``extra_surface`` (a seat beside a "table top" is not clutter on it).
 SURFACE_AREA = 0.25
@@ -215,16 +218,18 @@ def _unary(cls: ObjectClass, desc: ClusterDescription) -> np.ndarray:
 def continuations(desc: ClusterDescription) -> list[frozenset[int]]:
     """For every plane, the other planes of the cluster that continue its surface.
 
-    Only horizontal surfaces: two flat patches at one height that touch are one top
-    or one seat split by clutter, a seam or a gap in the scan.
+    Two patches with about the same normal and offset that touch are one top, one
+    seat or one backrest split by clutter, a seam or a gap in the scan.
     """
     planes = desc.planes
-    flat = [float(p.tilt) < CONTINUE_TILT for p in planes]
     out: list[set[int]] = [set() for _ in planes]
     for (i, j), rel in desc.relations.items():
-        if not (flat[i] and flat[j]) or float(rel.distance) > CONTINUE_GAP:
+        if float(rel.angle) > CONTINUE_ANGLE or float(rel.distance) > CONTINUE_GAP:
             continue
-        if abs(float(planes[i].height) - float(planes[j].height)) <= CONTINUE_STEP:
+        normal = np.asarray(planes[i].normal, dtype=float)
+        step = np.asarray(planes[j].centroid, dtype=float) - np.asarray(planes[i].centroid,
+                                                                          dtype=float)
+        if abs(float(normal @ step)) <= CONTINUE_STEP:
             out[i].add(j)
             out[j].add(i)
     return [frozenset(x) for x in out]
