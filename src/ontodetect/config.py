@@ -562,14 +562,9 @@ class Config:
         InvalidParameterError
             An unknown key or a bad value; the message names the key and the file.
         """
-        p = Path(path)
-        try:
-            text = p.read_text(encoding="utf-8")
-        except FileNotFoundError:
-            raise ReadError(p, "no such configuration file") from None
-        except (OSError, UnicodeDecodeError) as exc:
-            raise ReadError(p, f"cannot read configuration: {exc}") from None
-        return cls.from_yaml_text(text, source=str(p))
+        from .io._textfile import read_text
+
+        return cls.from_yaml_text(read_text(path, "configuration file"), source=str(Path(path)))
 
     @classmethod
     def from_yaml_text(cls, text: str, *, source: str | None = None) -> Config:

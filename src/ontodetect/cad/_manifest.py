@@ -38,6 +38,7 @@ import yaml
 from numpy.typing import NDArray
 
 from ..errors import CorruptFileError, InvalidParameterError, ReadError
+from ..io._textfile import read_text
 from ..preprocess import AXES
 from ..synth.meshes import Mesh
 from ._models import (
@@ -251,12 +252,7 @@ def load_manifest(path: str | os.PathLike[str]) -> ModelLibrary:
         Naming the manifest, the entry and the key at fault.
     """
     p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ReadError(p, "no such file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ReadError(p, f"cannot read ({exc})") from exc
+    text = read_text(p)
     try:
         doc = yaml.safe_load(text)
     except yaml.YAMLError as exc:

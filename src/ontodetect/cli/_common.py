@@ -9,6 +9,7 @@ import yaml
 
 from ..config import Config
 from ..errors import InvalidParameterError, ReadError
+from ..io._textfile import read_text
 from ..ontology import Ontology, load_ontology
 
 
@@ -32,11 +33,10 @@ def room_option(room: str | None, room_probs: Path | None) -> str | dict[str, An
         raise InvalidParameterError("--room-probs", "not combined with --room", str(room_probs))
     if room_probs is None:
         return room
+    text = read_text(room_probs)
     try:
-        data = yaml.safe_load(room_probs.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ReadError(room_probs, "no such file") from None
-    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
         raise ReadError(room_probs, f"not a readable YAML/JSON mapping ({exc})") from exc
     if not isinstance(data, dict):
         raise ReadError(room_probs, "expected a mapping of room category to probability")

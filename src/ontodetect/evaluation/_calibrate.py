@@ -66,7 +66,8 @@ import numpy as np
 import yaml
 
 from .._progress import progress
-from ..errors import InvalidParameterError, ReadError
+from ..errors import InvalidParameterError
+from ..io._textfile import read_text
 from ._dataset import (
     DatasetEvaluation,
     SceneSource,
@@ -1331,13 +1332,7 @@ def _builtin_text() -> str:
 
 
 def _read_text(path: str | os.PathLike[str]) -> str:
-    p = Path(path)
-    try:
-        return p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ReadError(p, "no such ontology file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ReadError(p, f"cannot read the ontology ({exc})") from exc
+    return read_text(path, "ontology file")
 
 
 def calibrate_dataset(

@@ -16,8 +16,9 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import CorruptFileError, ReadError
+from ..errors import CorruptFileError
 from ._atomic import atomic_write_text
+from ._textfile import read_text
 
 __all__ = ["DETECTIONS_FORMAT", "read_detections", "validate_detections", "write_detections"]
 
@@ -103,12 +104,7 @@ def read_detections(path: str | os.PathLike[str]) -> dict[str, Any]:
     p = Path(path)
     if p.is_dir():
         p = p / "detections.json"
-    try:
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ReadError(p, "no such file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ReadError(p, f"cannot read ({exc})") from exc
+    text = read_text(p)
     try:
         doc = json.loads(text)
     except json.JSONDecodeError as exc:
