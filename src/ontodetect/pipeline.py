@@ -31,6 +31,8 @@ from .ontology import (
     class_priors,
     score_cluster,
 )
+from .ontology._score import HORIZONTAL_TILT
+from .render import box_corners
 from .segment import Cluster, Segmentation, segment
 
 __all__ = ["Detection", "Result", "describe_cluster", "detect", "shelter_heights", "with_cad"]
@@ -193,8 +195,7 @@ def describe_cluster(cluster: Cluster, shelter: float = -math.inf) -> ClusterDes
     )
 
 
-#: Horizontal planes (tilt below this, degrees) of at least ``SHELTER_AREA`` m² can hide ...
-SHELTER_TILT = 10.0
+#: Horizontal planes of at least this area (m²) can hide ...
 SHELTER_AREA = 0.1
 #: ... what stands within this horizontal gap of their cluster's box (m).
 SHELTER_GAP = 0.4
@@ -202,10 +203,8 @@ SHELTER_GAP = 0.4
 
 def _footprint(box: Any) -> NDArray:
     """(2, 2) min and max corner of the xy rectangle around an upright box."""
-    c, s = math.cos(box.yaw), math.sin(box.yaw)
-    half = np.abs(np.array([[c, -s], [s, c]])) @ (np.asarray(box.size[:2], dtype=float) / 2)
-    center = np.asarray(box.center[:2], dtype=float)
-    return np.stack([center - half, center + half])
+    xy = box_corners(box.center, box.size, box.yaw)[:4, :2]
+    return np.stack([xy.min(axis=0), xy.max(axis=0)])
 
 
 def shelter_heights(seg: Segmentation) -> NDArray:
@@ -221,7 +220,7 @@ def shelter_heights(seg: Segmentation) -> NDArray:
     boxes = np.zeros((n, 2, 2))
     for k, c in enumerate(seg):
         flat = [float(p.height) for p in c.planes
-                if float(p.tilt) < SHELTER_TILT and float(p.area) >= SHELTER_AREA]
+                if float(p.tilt) < HORIZONTAL_TILT and float(p.area) >= SHELTER_AREA]
         tops[k] = max(flat, default=-math.inf)
         boxes[k] = _footprint(c.box)
     if n == 0:

@@ -23,6 +23,7 @@ puts its mass on "none".
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from collections.abc import Mapping, Sequence
@@ -64,8 +65,6 @@ EXTRA_PLANE_AREA = 0.08
 CONTINUE_ANGLE = 10.0
 CONTINUE_STEP = 0.05
 CONTINUE_GAP = 0.1
-#: Planes tilted less than this (degrees) are flat: candidates for a second surface.
-CONTINUE_TILT = 10.0
 #: An unexplained horizontal plane of at least this area (m²) is a second surface, which
 #: costs a class's ``extra_surface`` (a seat beside a "table top" is not clutter on it).
 SURFACE_AREA = 0.25
@@ -108,6 +107,11 @@ class ClusterDescription:
     height: float
     bottom: float
     shelter: float = -math.inf
+
+    @functools.cached_property
+    def continued(self) -> list[frozenset[int]]:
+        """:func:`continuations` of this cluster, worked out once for all classes."""
+        return continuations(self)
 
     @property
     def rise(self) -> float:
@@ -199,7 +203,7 @@ def _extra_log(cls: ObjectClass, planes: Sequence[Any]) -> np.ndarray:
     """(planes,) log-factor each plane costs when no part of ``cls`` explains it."""
     out = math.log(cls.extra_plane) * _plane_weights(planes)
     if cls.extra_surface is not None:
-        surface = np.array([float(p.tilt) < CONTINUE_TILT and float(p.area) >= SURFACE_AREA
+        surface = np.array([float(p.tilt) < HORIZONTAL_TILT and float(p.area) >= SURFACE_AREA
                             for p in planes], dtype=bool)
         out[surface] = math.log(cls.extra_surface)
     return out
@@ -283,7 +287,7 @@ def score_class(cls: ObjectClass, desc: ClusterDescription, log_prior: float = 0
     # is not a chair with a back, but a chair is still a chair with a caster in view.
     plane_log_extra = _extra_log(cls, desc.planes)
     all_extra = float(plane_log_extra.sum())
-    more = continuations(desc)
+    more = desc.continued
     best_log, best_assign = -math.inf, None
     for combo in itertools.product(*candidates):
         used = [c for c in combo if c is not None]
