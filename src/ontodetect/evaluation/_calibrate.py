@@ -1331,10 +1331,6 @@ def _builtin_text() -> str:
     return resources.files("ontodetect").joinpath("data/furniture.yaml").read_text("utf-8")
 
 
-def _read_text(path: str | os.PathLike[str]) -> str:
-    return read_text(path, "ontology file")
-
-
 def calibrate_dataset(
     path: str | os.PathLike[str],
     *,
@@ -1389,7 +1385,7 @@ def calibrate_dataset(
         raise InvalidParameterError("detect_options", "without 'ontology' (use base=)", "ontology")
     if not 0.0 < min_iou <= 1.0:
         raise InvalidParameterError("min_iou", "a number in (0, 1]", min_iou)
-    text = _builtin_text() if base is None else _read_text(base)
+    text = _builtin_text() if base is None else read_text(base, "ontology file")
     source = "builtin:furniture.yaml" if base is None else str(base)
     base_onto = parse_ontology(text, source)
     units = list(scenes) if scenes is not None else discover_scenes(path, format)
