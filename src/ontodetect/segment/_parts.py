@@ -186,15 +186,18 @@ class PartSeed:
         seat with attached armrests, at most the distance to the nearest of their
         voxels beyond ``FOOTPRINT_GAP``.
         """
-        d = np.abs((points[:, :2] - self.center) @ self.axes.T) - self.extent / 2
-        out = np.linalg.norm(np.maximum(d, 0.0), axis=1)
-        if signed:
-            out = np.where(out > 0, out, d.max(axis=1))
+        out = self._outside_outline(points, signed)
         tree = self._attached_tree
         if tree is not None:
             dist, _ = tree.query(points[:, :2], k=1)
             out = np.minimum(out, np.maximum(dist - FOOTPRINT_GAP, 0.0))
         return out
+
+    def _outside_outline(self, points: NDArray[np.float64], signed: bool) -> NDArray[np.float64]:
+        """(k,) float: :meth:`outside` for the part's own outline, attached parts left out."""
+        d = np.abs((points[:, :2] - self.center) @ self.axes.T) - self.extent / 2
+        out = np.linalg.norm(np.maximum(d, 0.0), axis=1)
+        return np.where(out > 0, out, d.max(axis=1)) if signed else out
 
     def in_prism(
         self, points: NDArray[np.float64], margin: float | None = None
@@ -206,9 +209,7 @@ class PartSeed:
         armrests and back top attached to a seat, ``ATTACHED_MARGIN`` applies.
         """
         margin = self.margin if margin is None else margin
-        d = np.abs((points[:, :2] - self.center) @ self.axes.T) - self.extent / 2
-        out = np.linalg.norm(np.maximum(d, 0.0), axis=1)
-        out = np.where(out > 0, out, d.max(axis=1))
+        out = self._outside_outline(points, signed=True)
         above = points[:, 2] > self.height + ABOVE_TOLERANCE
         # The outline of a patch is known to about a voxel: above a top, only what is
         # clearly inside it counts.
