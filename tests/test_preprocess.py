@@ -246,6 +246,21 @@ def test_structure_and_object_mask(rng):
     assert scene.centers[scene.object_mask, 2].max() <= 1.4
 
 
+def test_walls_do_not_depend_on_where_the_scan_sits(rng):
+    # Walls a little out of true (a drifting scan): each cell's normal is off by a degree
+    # or so, which must not split or lose a wall when the scan sits far from the origin.
+    pts, _ = room(rng, size=(6.0, 5.0))
+    pts = pts + rng.normal(0.0, 0.002, pts.shape)
+    near = prepare(pts)
+    far = prepare(pts + [40.0, -25.0, 0.0])
+    for scene in (near, far):
+        assert sum(p.kind == "wall" for p in scene.structure_planes) == 4
+    assert np.mean(near.structure_label == far.structure_label) > 0.999
+    offsets = sorted(float(p.offset) for p in near.structure_planes)
+    moved = sorted(float(p.offset - p.normal[:2] @ [40.0, -25.0]) for p in far.structure_planes)
+    assert offsets == pytest.approx(moved, abs=1e-3)
+
+
 def test_altitude_cutoff_is_configurable(rng):
     pts, _ = room(rng)
     cfg = Config().with_overrides(["prepare.altitude_cutoff=0.5"])

@@ -132,7 +132,11 @@ def _walls(
     az = np.degrees(np.arctan2(nrm[:, 1], nrm[:, 0])) % 180.0
     rad = np.radians(az)
     n2 = np.stack([np.cos(rad), np.sin(rad)], axis=1)
-    off = (ctr[:, :2] * n2).sum(axis=1)
+    # Offsets from the middle of the cells, not from the origin of the input frame: a
+    # cell's normal is a degree or two off its wall's, which moves its offset in
+    # proportion to its distance from the reference point.
+    xy = ctr[:, :2] - ctr[:, :2].mean(axis=0)
+    off = (xy * n2).sum(axis=1)
     free = np.ones(len(nrm), dtype=bool)
     walls: list[StructurePlane] = []
     # Azimuth wraps at 0/180 degrees, where a wall's offset changes sign: cells near the
