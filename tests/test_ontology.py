@@ -13,6 +13,7 @@ from ontodetect.ontology import (
     Gaussian,
     builtin_ontology,
     class_priors,
+    cluster_log_factor,
     continuations,
     missing_factor,
     parse_ontology,
@@ -114,6 +115,31 @@ def test_chair_assignment_and_factors():
     assert s.factors["seat"]["He"] == pytest.approx(he)
     total = math.prod(f["def"] for f in s.factors.values())
     assert math.log(total) == pytest.approx(s.log_likelihood)
+
+
+def test_height_cut_at_the_search_volume_counts_as_at_least_that_tall():
+    # Seat and backrest planes on a cluster that reaches the altitude cut-off: a cabinet
+    # or a shelf cut at 1.4 m, whose true top is higher; chairs are never that tall.
+    o = builtin_ontology()
+    seen = chair()
+    tall = ClusterDescription(planes=seen.planes, relations=seen.relations, length=0.55,
+                              breadth=0.5, height=1.38, bottom=0.0)
+    cut = ClusterDescription(planes=seen.planes, relations=seen.relations, length=0.55,
+                             breadth=0.5, height=1.38, bottom=0.0, ceiling=1.4)
+    assert not tall.cut and cut.cut and not chair().cut
+    g = o["chair"].cluster.constraints["height"]
+    factor = {c.feature: c.factor for c in score_class(o["chair"], cut).constraints
+              if c.part == "cluster"}["height"]
+    assert factor == pytest.approx(np.mean(g(np.linspace(1.38, 1.98, 13))))
+    assert factor < 0.3 < g(1.38)
+    gap = score_class(o["chair"], tall).log_likelihood - score_class(o["chair"], cut).log_likelihood
+    assert gap == pytest.approx(math.log(g(1.38) / factor))
+    assert score_cluster(cut, o).probabilities["chair"] < score_cluster(tall, o).probabilities[
+        "chair"]
+    # A class that may be taller than what is seen keeps its factor.
+    table = o["table"].cluster.constraints["height"]
+    assert cluster_log_factor(table, cut, "height") == pytest.approx(
+        math.log(np.mean(table(np.linspace(1.38, 1.98, 13)))))
 
 
 def test_occluded_backrest_is_penalised_not_fatal():

@@ -35,7 +35,10 @@ from .ontology._score import HORIZONTAL_TILT
 from .render import box_corners
 from .segment import Cluster, Segmentation, segment
 
-__all__ = ["Detection", "Result", "describe_cluster", "detect", "shelter_heights", "with_cad"]
+__all__ = [
+    "Detection", "Result", "describe_cluster", "describe_clusters", "detect", "shelter_heights",
+    "with_cad",
+]
 
 #: Format tag of detections.json.
 DETECTIONS_FORMAT = "ontodetect.detections/1"
@@ -181,9 +184,10 @@ def with_cad(result: Result, fits: Sequence[Any]) -> Result:
     return dataclasses.replace(result, detections=detections)
 
 
-def describe_cluster(cluster: Cluster, shelter: float = -math.inf) -> ClusterDescription:
+def describe_cluster(cluster: Cluster, shelter: float = -math.inf,
+                     ceiling: float = math.inf) -> ClusterDescription:
     """What the ontology scoring needs to know about a cluster (``shelter``: see
-    :func:`shelter_heights`)."""
+    :func:`shelter_heights`; ``ceiling``: the top of the search volume)."""
     return ClusterDescription(
         planes=cluster.planes,
         relations=cluster.relations_by_pair,
@@ -192,7 +196,15 @@ def describe_cluster(cluster: Cluster, shelter: float = -math.inf) -> ClusterDes
         height=cluster.height,
         bottom=cluster.bottom,
         shelter=shelter,
+        ceiling=ceiling,
     )
+
+
+def describe_clusters(seg: Segmentation) -> list[ClusterDescription]:
+    """:func:`describe_cluster` for every cluster, with what stands beside it and the
+    altitude cut-off of the search."""
+    ceiling = float(seg.config.prepare.altitude_cutoff)
+    return [describe_cluster(c, float(h), ceiling) for c, h in zip(seg, shelter_heights(seg))]
 
 
 #: Horizontal planes of at least this area (m²) can hide ...
@@ -336,11 +348,9 @@ def detect(
 
     t0 = time.perf_counter()
     scores: list[ClusterScores] = []
-    shelters = shelter_heights(seg)
     with progress("Scoring clusters", total=len(seg)) as advance:
-        for c, shelter in zip(seg, shelters):
-            scores.append(score_cluster(describe_cluster(c, float(shelter)), ontology, priors,
-                                        none_likelihood=none_likelihood))
+        for desc in describe_clusters(seg):
+            scores.append(score_cluster(desc, ontology, priors, none_likelihood=none_likelihood))
             advance(1)
     timings["score"] = time.perf_counter() - t0
 

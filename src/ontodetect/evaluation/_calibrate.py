@@ -396,7 +396,7 @@ def collect_scene_samples(
     """
     from ..errors import OntoDetectError
     from ..ontology import score_class
-    from ..pipeline import describe_cluster, shelter_heights
+    from ..pipeline import describe_clusters
     from ..segment import segment
 
     opts = dict(segment_options or {})
@@ -421,7 +421,7 @@ def collect_scene_samples(
     used: dict[str, int] = {}
     skipped: dict[str, int] = {}
     # Described as detect describes them, with what stands beside each cluster.
-    descriptions = [describe_cluster(c, float(h)) for c, h in zip(seg, shelter_heights(seg))]
+    descriptions = describe_clusters(seg)
     for g, gt in enumerate(gts):
         if not clusters or iou[:, g].max() < min_iou:
             skipped[gt.label] = skipped.get(gt.label, 0) + 1

@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from scipy.special import logsumexp
 
 from ._gaussian import Gaussian
 from ._schema import PART_FEATURES, ObjectClass, Ontology, Part
@@ -77,6 +78,13 @@ SHELTER_TOLERANCE = 0.05
 #: A part counts as hidden below a lifted cluster when the centre of its height
 #: constraint is less than this above the cluster's lowest point (m).
 HIDDEN_MARGIN = 0.1
+#: A cluster whose top comes this close (m) to the top of the search volume may go on
+#: above it (a cabinet or a shelf cut at the altitude cut-off) ...
+CUT_MARGIN = 0.05
+#: ... so its height is only known to be at least what is seen: its height factor is the
+#: mean of the constraint over this span (m) above the seen top.
+CUT_SPAN = 0.6
+CUT_SAMPLES = 13
 
 
 @dataclass(frozen=True)
@@ -98,6 +106,9 @@ class ClusterDescription:
         Height above the floor of the highest horizontal surface of a neighbouring
         object (a desk beside a chair), which can hide this cluster's lower part;
         ``-inf`` when there is none or it is unknown.
+    ceiling : float
+        Top of the search volume above the floor (the altitude cut-off, m): a
+        cluster that reaches it may go on above, so its height is a lower bound.
     """
 
     planes: Sequence[Any]
@@ -107,6 +118,12 @@ class ClusterDescription:
     height: float
     bottom: float
     shelter: float = -math.inf
+    ceiling: float = math.inf
+
+    @property
+    def cut(self) -> bool:
+        """Whether the cluster reaches the top of the search volume."""
+        return self.height >= self.ceiling - CUT_MARGIN
 
     @functools.cached_property
     def continued(self) -> list[frozenset[int]]:
@@ -192,6 +209,20 @@ def _cluster_feature(desc: ClusterDescription, feature: str) -> float:
     if feature == "planes":
         return float(len(desc.planes))
     return float(getattr(desc, feature))
+
+
+def cluster_log_factor(g: Gaussian, desc: ClusterDescription, feature: str) -> float:
+    """Log-factor of a cluster constraint; a height cut at the search volume is censored.
+
+    The height of a cluster that reaches the altitude cut-off is only known to be at
+    least what is seen: the factor is the mean of the Gaussian over ``CUT_SPAN`` above
+    it, so a class that is never that tall pays for it and one that may be does not.
+    """
+    value = _cluster_feature(desc, feature)
+    if feature == "height" and desc.cut:
+        logs = np.asarray(g.log(np.linspace(value, value + CUT_SPAN, CUT_SAMPLES)))
+        return float(logsumexp(logs) - math.log(CUT_SAMPLES))
+    return float(g.log(value))
 
 
 def _plane_weights(planes: Sequence[Any]) -> np.ndarray:
@@ -348,8 +379,9 @@ def score_class(cls: ObjectClass, desc: ClusterDescription, log_prior: float = 0
                                            float(len(unexplained)), None, f))
     for feature, g in cls.cluster.constraints.items():
         value = _cluster_feature(desc, feature)
-        f = float(g(value))
-        cluster_log += float(g.log(value))
+        log = cluster_log_factor(g, desc, feature)
+        f = math.exp(log)
+        cluster_log += log
         cluster_factor *= f
         constraints.append(ConstraintValue("cluster", feature, "cluster", value, g, f))
     for groups in factors.values():
