@@ -2,16 +2,17 @@
 
 Usage::
 
-    .venv/bin/python scripts/turn_report.py DATASET [--turns 0 90 180 270] [--shift 0]
-        [--jobs 2] [--seed 0] [--json OUT.json]
+    .venv/bin/python scripts/turn_report.py DATASET [--turns 0 90 180 270] [--seeds 0]
+        [--shift 0] [--jobs 2] [--json OUT.json]
 
-Every scene of DATASET (any layout ``ontodetect eval`` reads) is detected once per turn:
+Every scene of DATASET (any layout ``ontodetect eval`` reads) is detected once per turn
+and seed (the seed of the MSAC plane fits):
 its points rotated by that many degrees about the vertical axis (and moved by ``--shift``
 metres along x and y), point order kept, so the ground truth stays the same. Reported:
-precision and recall per class at point IoU >= 0.25 for every turn, and pooled over all
-turns. A scan turned by 90 degrees is the same room; the spread between turns is how much
-a figure from one pass over a small dataset can be trusted, and the pooled figure is the
-steadier one.
+precision and recall per class at point IoU >= 0.25 for every turn (over the seeds), and
+pooled over all turns and seeds. A scan turned by 90 degrees is the same room; the spread
+between turns is how much a figure from one pass over a small dataset can be trusted, and
+the pooled figure is the steadier one.
 """
 
 from __future__ import annotations
@@ -48,14 +49,14 @@ def turned(xyz: np.ndarray, degrees: float, shift: float) -> np.ndarray:
     return xyz @ rot.T + [shift, shift, 0.0]
 
 
-def run_one(unit: tuple, *, shift: float, seed: int) -> SceneResult:
-    source, degrees = unit
+def run_one(unit: tuple, *, shift: float) -> SceneResult:
+    source, degrees, seed = unit
     warnings.simplefilter("ignore", DataWarning)
     scene = load_scene(source)  # ground truth by row: the same whichever way it is turned
     cloud = scene.cloud.replace(xyz=turned(scene.cloud.xyz, degrees, shift))
     result = detect(cloud, seed=seed)
     preds = [Instance.make(d.id, d.label, d.point_indices, d.score) for d in result.detections]
-    return SceneResult(f"{source.name}@{degrees:g}", preds, scene.gts, 0.0)
+    return SceneResult(f"{source.name}@{degrees:g}s{seed}", preds, scene.gts, 0.0)
 
 
 def _row(ev) -> dict:
@@ -69,20 +70,20 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("dataset", type=Path)
     ap.add_argument("--turns", type=float, nargs="+", default=[0.0, 90.0, 180.0, 270.0])
     ap.add_argument("--shift", type=float, default=0.0)
-    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--seeds", type=int, nargs="+", default=[0])
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--json", type=Path)
     args = ap.parse_args(argv)
 
     sources = discover_scenes(args.dataset)
-    units = [(s, t) for t in args.turns for s in sources]
-    results = map_scenes(functools.partial(run_one, shift=args.shift, seed=args.seed), units,
+    units = [(s, t, seed) for seed in args.seeds for t in args.turns for s in sources]
+    results = map_scenes(functools.partial(run_one, shift=args.shift), units,
                          jobs=args.jobs, description="Turned scenes")
-    report: dict = {"dataset": str(args.dataset), "shift": args.shift, "seed": args.seed,
+    report: dict = {"dataset": str(args.dataset), "shift": args.shift, "seeds": args.seeds,
                     "turns": {}}
     print(f"{'turn':>8}  " + "  ".join(f"{c:>22}" for c in CLASSES))
     for t in args.turns:
-        ev = evaluate_scenes([r for r in results if r.name.endswith(f"@{t:g}")], CLASSES)
+        ev = evaluate_scenes([r for r in results if f"@{t:g}s" in r.name], CLASSES)
         report["turns"][f"{t:g}"] = _row(ev)
         print(f"{t:>7g}°  " + "  ".join(
             f"P {ev.per_class[c].precision:.2f} R {ev.per_class[c].recall:.2f} "
