@@ -343,3 +343,15 @@ def test_normals_and_smoothing(rng):
     assert np.mean(normals[:, 2] > 0.95) > 0.95
     smooth = smooth_surface(plane, 16)
     assert smooth[:, 2].std() < 0.5 * plane[:, 2].std()
+
+
+def test_turn_rotates_the_levelled_frame_only(rng):
+    pts, _ = room(rng)
+    plain = prepare(pts)
+    turned = prepare(pts, Config().replace(prepare={"turn": 30.0}))
+    a = np.radians(30.0)
+    rot = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+    assert np.allclose(turned.cloud.xyz[:, :2], plain.cloud.xyz[:, :2] @ rot.T, atol=1e-9)
+    assert np.allclose(turned.cloud.xyz[:, 2], plain.cloud.xyz[:, 2], atol=1e-9)
+    assert np.allclose(turned.from_level(turned.cloud.xyz), pts, atol=1e-9)
+    assert sum(p.kind == "wall" for p in turned.structure_planes) == 4

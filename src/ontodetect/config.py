@@ -289,6 +289,12 @@ class PrepareConfig(_Section):
     level_on_floor: bool = _param(
         True, Boolean(), "Refine the up direction with the floor plane's normal."
     )
+    # The voxel grid and the cells are laid along the levelled frame's axes; a turn about
+    # the vertical shows the same scan to them from another angle (detect's votes).
+    turn: float = _param(
+        0.0, Interval(-180.0, 180.0, "both"),
+        "Extra turn (deg) of the levelled frame about the vertical.",
+    )
     # Reconstructions bend: real scanned floors rise 20 cm across a room. Heights are
     # measured above a floor height map with tiles of this size; 0 = one flat floor.
     floor_tile: float = _param(
@@ -445,6 +451,16 @@ class DetectConfig(_Section):
         0.05, Interval(0.0, 1.0, "right"),
         "Likelihood of a cluster under 'none of the classes'.")
     context: float = _param(0.0, NON_NEGATIVE, "Strength of the seat-near-table pairwise term.")
+    # One pass decides on one voxel grid: which voxels the points fall in moves planes and
+    # clusters enough to make or break a detection. A majority of passes over the scan
+    # turned by a fraction of a degree keeps what does not depend on the grid.
+    votes: int = _param(
+        1, Interval(1, 15, "both", integer=True),
+        "Passes over the scan, each turned by vote_turn more; a majority keeps a detection.",
+    )
+    vote_turn: float = _param(
+        0.7, Interval(0.0, 45.0, "neither"), "Turn (deg) between the passes of a vote."
+    )
 
 
 # -- the whole configuration ---------------------------------------------------------------

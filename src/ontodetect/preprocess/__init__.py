@@ -42,6 +42,7 @@ from ._gravity import (
     level_transform,
     manhattan_axes,
     rotation_between,
+    turn_about_z,
 )
 from ._structure import STRUCTURE_LABELS, StructurePlane, find_structure
 from ._surface import estimate_normals, graph_normals, smooth_surface
@@ -77,6 +78,7 @@ __all__ = [
     "smooth_surface",
     "statistical_outlier_mask",
     "surface_spacing",
+    "turn_about_z",
     "voxelize",
 ]
 
@@ -460,6 +462,8 @@ def prepare(
     ):
         floor = FloorFit(u, floor.offset, floor.area, floor.found)
     to_level = level_transform(floor.normal, floor.offset, k_s)
+    if cfg.turn:
+        to_level = turn_about_z(cfg.turn) @ to_level
     R = to_level[:3, :3] / k_s
     shift = to_level[:3, 3]
     rotated = float(np.linalg.norm(R - np.eye(3))) > IDENTITY_TOLERANCE
