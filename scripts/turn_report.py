@@ -3,7 +3,7 @@
 Usage::
 
     .venv/bin/python scripts/turn_report.py DATASET [--turns 0 90 180 270] [--seeds 0]
-        [--shift 0] [--jobs 2] [--json OUT.json]
+        [--shift 0] [--votes 1] [--jobs 2] [--json OUT.json]
 
 Every scene of DATASET (any layout ``ontodetect eval`` reads) is detected once per turn
 and seed (the seed of the MSAC plane fits):
@@ -49,12 +49,12 @@ def turned(xyz: np.ndarray, degrees: float, shift: float) -> np.ndarray:
     return xyz @ rot.T + [shift, shift, 0.0]
 
 
-def run_one(unit: tuple, *, shift: float) -> SceneResult:
+def run_one(unit: tuple, *, shift: float, votes: int) -> SceneResult:
     source, degrees, seed = unit
     warnings.simplefilter("ignore", DataWarning)
     scene = load_scene(source)  # ground truth by row: the same whichever way it is turned
     cloud = scene.cloud.replace(xyz=turned(scene.cloud.xyz, degrees, shift))
-    result = detect(cloud, seed=seed)
+    result = detect(cloud, seed=seed, votes=votes)
     preds = [Instance.make(d.id, d.label, d.point_indices, d.score) for d in result.detections]
     return SceneResult(f"{source.name}@{degrees:g}s{seed}", preds, scene.gts, 0.0)
 
@@ -70,6 +70,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("dataset", type=Path)
     ap.add_argument("--turns", type=float, nargs="+", default=[0.0, 90.0, 180.0, 270.0])
     ap.add_argument("--shift", type=float, default=0.0)
+    ap.add_argument("--votes", type=int, default=1, help="passes per detection (detect.votes)")
     ap.add_argument("--seeds", type=int, nargs="+", default=[0])
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--json", type=Path)
@@ -77,9 +78,10 @@ def main(argv: list[str] | None = None) -> int:
 
     sources = discover_scenes(args.dataset)
     units = [(s, t, seed) for seed in args.seeds for t in args.turns for s in sources]
-    results = map_scenes(functools.partial(run_one, shift=args.shift), units,
+    results = map_scenes(functools.partial(run_one, shift=args.shift, votes=args.votes), units,
                          jobs=args.jobs, description="Turned scenes")
     report: dict = {"dataset": str(args.dataset), "shift": args.shift, "seeds": args.seeds,
+                    "votes": args.votes,
                     "turns": {}}
     print(f"{'turn':>8}  " + "  ".join(f"{c:>22}" for c in CLASSES))
     for t in args.turns:

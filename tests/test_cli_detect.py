@@ -76,6 +76,7 @@ def test_detect_explain_prints_constraints(scene, tmp_path, capsys):
     (["--room", "spaceship"], "'room'"),
     (["--set", "cluster.radius=-1"], "cluster.radius"),
     (["--threshold", "2"], "'threshold'"),
+    (["--votes", "0"], "'detect.votes'"),
 ])
 def test_detect_bad_parameters_exit_2_with_one_line(scene, tmp_path, capsys, args, message):
     code = main(["detect", str(scene / "cloud.ply"), "-o", str(tmp_path / "o"), *args])

@@ -55,6 +55,8 @@ def test_bad_inputs():
         detect(np.zeros((10, 3)))
     with pytest.raises(InvalidParameterError, match="none_likelihood"):
         detect(point_cloud(np.zeros((10, 3))), none_likelihood=0)
+    with pytest.raises(InvalidParameterError, match=r"'detect\.votes'"):
+        detect(point_cloud(np.zeros((10, 3))), votes=0)
 
 
 def test_demo_runs_and_scores_itself(tmp_path):
@@ -88,3 +90,66 @@ def test_shelter_is_the_highest_top_beside_a_cluster():
     # the rotated box's footprint reaches 1.32 m: 0.52 m from the desk, beyond the gap
     assert got[2] == -math.inf
     assert shelter_heights([]).shape == (0,)
+
+
+# -- votes ---------------------------------------------------------------------------------
+def _rows(a, b):
+    return np.arange(a, b, dtype=np.int64)
+
+
+def test_majority_keeps_what_most_passes_found():
+    from ontodetect.pipeline import majority_labels
+
+    chair, table, lone = _rows(0, 10), _rows(20, 30), _rows(40, 50)
+    first = {0: ("chair", 0.6), 2: ("chair", 0.9)}
+    others = [
+        [("chair", chair, 0.4), ("table", table, 0.8)],
+        [("table", table[1:], 0.5), ("chair", _rows(3, 13), 0.7)],  # IoU 7/13 with chair
+    ]
+    kept = majority_labels([chair, table, lone], first, others)
+    # The chair: all three passes; the table: missed by the first pass, found by both
+    # others; the lone chair only by the first pass: gone.
+    assert kept[0] == ("chair", 3, pytest.approx((0.6 + 0.4 + 0.7) / 3))
+    assert kept[1] == ("table", 2, pytest.approx(0.65))
+    assert 2 not in kept
+    # Below the IoU needed a detection does not back a cluster.
+    assert majority_labels([chair], {}, [[("chair", _rows(6, 16), 1.0)]] * 2) == {}
+    # Passes that disagree on the label: the majority label wins.
+    split = [[("table", chair, 0.5)], [("table", chair, 0.5)], [("chair", chair, 0.5)]]
+    assert majority_labels([chair], {0: ("chair", 0.5)}, split) == {}
+    assert majority_labels([chair], {0: ("table", 0.5)}, split)[0][0] == "table"
+
+
+def test_vote_turns_alternate():
+    from ontodetect.pipeline import vote_turns
+
+    assert vote_turns(1, 0.7) == []
+    assert vote_turns(4, 0.5) == [0.5, -0.5, 1.0]
+
+
+def test_votes_keep_detections_in_the_input_frame(dining):
+    from ontodetect.config import Config
+
+    one = detect(dining)
+    three = detect(dining, config=Config().replace(detect={"votes": 3}))
+    again = detect(dining, config=Config().replace(detect={"votes": 3}))
+    a, b = three.to_dict(), again.to_dict()
+    a.pop("timings"), b.pop("timings")
+    assert a == b
+    assert "votes" in three.timings
+    labels = [d.label for d in three.detections]
+    assert labels.count("chair") >= 2 and "table" in labels
+    truth = dining.fields["class_id"]
+    names = {5: "chair", 6: "sofa", 7: "table", 14: "table"}
+    for d in three.detections:
+        assert d.votes in (2, 3) and d.to_dict()["votes"] == d.votes
+        ids, counts = np.unique(truth[d.point_indices], return_counts=True)
+        assert names.get(int(ids[np.argmax(counts)])) == d.label, d
+        # The box is in the input frame, around the object's points.
+        pts = dining.xyz[d.point_indices]
+        assert np.all(d.center[:2] > pts[:, :2].min(axis=0))
+        assert np.all(d.center[:2] < pts[:, :2].max(axis=0))
+    assert all(d.votes is None for d in one.detections)
+    label, instance = three.point_labels()
+    assert set(label[instance > 0]) == {three.class_names.index(d.label) for d in three.detections}
+    assert set(np.unique(instance)) == {0, *(d.id for d in three.detections)}

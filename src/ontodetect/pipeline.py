@@ -36,8 +36,8 @@ from .render import box_corners
 from .segment import Cluster, Segmentation, segment
 
 __all__ = [
-    "Detection", "Result", "describe_cluster", "describe_clusters", "detect", "shelter_heights",
-    "with_cad",
+    "Detection", "Result", "describe_cluster", "describe_clusters", "detect", "majority_labels",
+    "shelter_heights", "vote_turns", "with_cad",
 ]
 
 #: Format tag of detections.json.
@@ -68,6 +68,10 @@ class Detection:
         The planes assigned to the label's parts.
     cluster : int
         Index of the cluster in the segmentation.
+    cad : dict, optional
+        The fitted CAD model (see :func:`with_cad`).
+    votes : int, optional
+        Passes that found the object when ``detect.votes`` > 1.
     """
 
     id: int
@@ -82,6 +86,7 @@ class Detection:
     parts: list[dict[str, Any]]
     cluster: int
     cad: dict[str, Any] | None = None
+    votes: int | None = None
 
     def to_dict(self) -> dict[str, Any]:
         out: dict[str, Any] = {
@@ -99,6 +104,8 @@ class Detection:
         }
         if self.cad is not None:
             out["cad"] = self.cad
+        if self.votes is not None:
+            out["votes"] = self.votes
         return out
 
 
@@ -290,6 +297,7 @@ def detect(
     beta: float | None = None,
     none_likelihood: float | None = None,
     context: float | None = None,
+    votes: int | None = None,
     seed: int = 0,
     up: str | Sequence[float] | None = None,
     scale: float | None = None,
@@ -312,6 +320,10 @@ def detect(
         Override ``config.detect``: decision threshold on P_obj|ont (Table 4.1:
         15 %), weight β of the class probability in the energy (γ = 1 − β),
         likelihood of "none of the classes", strength of the seat-near-table term.
+    votes : int, optional
+        Override ``config.detect.votes``: passes over the scan, each turned by
+        ``detect.vote_turn`` degrees more about the vertical; a detection stays when
+        more than half of them find it (:func:`majority_labels`).
     seed : int
         Seed of every random step.
     up, scale :
@@ -336,12 +348,47 @@ def detect(
     beta = d.beta if beta is None else beta
     none_likelihood = d.none_likelihood if none_likelihood is None else none_likelihood
     context = d.context if context is None else context
+    if votes is not None:
+        config = config.replace(detect={"votes": votes})  # checked like the file's value
+        d = config.detect
     if not 0.0 < none_likelihood <= 1.0:
         raise InvalidParameterError("none_likelihood", "a number in (0, 1]", none_likelihood)
     ontology = ontology or builtin_ontology()
     priors = class_priors(ontology, room, indoor)
-    timings: dict[str, float] = {}
+    opts = {"ontology": ontology, "priors": priors, "threshold": threshold, "beta": beta,
+            "none_likelihood": none_likelihood, "context": context, "seed": seed, "up": up,
+            "scale": scale}
+    seg, scores, choices, found, timings = _one_pass(cloud, config, **opts)
+    if d.votes > 1:
+        t0 = time.perf_counter()
+        others = []
+        for turn in vote_turns(d.votes, d.vote_turn):
+            turned = config.replace(prepare={"turn": config.prepare.turn + turn})
+            others.append(_one_pass(cloud, turned, **opts)[3])
+        found, choices = _vote(cloud, seg, scores, choices, found, others, ontology)
+        timings["votes"] = time.perf_counter() - t0
+    found.sort(key=lambda d: (-d.score, d.cluster))
+    detections = [Detection(**{**d.__dict__, "id": i + 1}) for i, d in enumerate(found)]
+    return Result(cloud=cloud, detections=detections, segmentation=seg, scores=scores,
+                  choices=choices, ontology=ontology, priors=priors, timings=timings)
 
+
+def vote_turns(votes: int, step: float) -> list[float]:
+    """Turns (deg) of the passes after the first: +step, -step, +2 step, -2 step...
+
+    >>> vote_turns(5, 0.7)
+    [0.7, -0.7, 1.4, -1.4]
+    """
+    return [step * ((i + 1) // 2) * (1 if i % 2 else -1) for i in range(1, votes)]
+
+
+def _one_pass(cloud: PointCloud, config: Config, *, ontology: Ontology,
+              priors: Mapping[str, float], threshold: float, beta: float,
+              none_likelihood: float, context: float, seed: int, up: Any, scale: Any,
+              ) -> tuple[Segmentation, list[ClusterScores], list[LabelChoice], list[Detection],
+                         dict[str, float]]:
+    """Segment, score and label once; detections numbered 0, in cluster order."""
+    timings: dict[str, float] = {}
     t0 = time.perf_counter()
     seg = segment(cloud, config, seed=seed, up=up, scale=scale)
     timings["segment"] = time.perf_counter() - t0
@@ -359,21 +406,113 @@ def detect(
     choices = label_clusters(scores, [c.planes for c in seg], ontology, beta=beta,
                              threshold=threshold, centers=centers, context=context)
     timings["label"] = time.perf_counter() - t0
+    found = [_detection(cloud, seg, k, scores[k], choice.label, choice.extra["class"],
+                        float(scores[k].probabilities[choice.extra["class"]]), choice.costs)
+             for k, choice in enumerate(choices) if choice.label is not None]
+    return seg, scores, choices, found, timings
 
-    found = []
-    for k, (c, s, choice) in enumerate(zip(seg, scores, choices)):
-        if choice.label is None:
-            continue
-        cls_name = choice.extra["class"]
-        center, size, yaw = _to_input_frame(seg, c)
-        found.append(Detection(
-            id=0, label=choice.label, score=float(s.probabilities[cls_name]),
-            probabilities={n: float(p) for n, p in s.probabilities.items() if n != "none"},
-            costs=dict(choice.costs), center=center, size=size, yaw=yaw,
-            point_indices=np.sort(cloud.index[c.point_indices]),
-            parts=_parts(seg, c, s.classes[cls_name].assignment), cluster=k,
-        ))
-    found.sort(key=lambda d: (-d.score, d.cluster))
-    detections = [Detection(**{**d.__dict__, "id": i + 1}) for i, d in enumerate(found)]
-    return Result(cloud=cloud, detections=detections, segmentation=seg, scores=scores,
-                  choices=choices, ontology=ontology, priors=priors, timings=timings)
+
+def _detection(cloud: PointCloud, seg: Segmentation, k: int, scores: ClusterScores,
+               label: str, cls_name: str, score: float, costs: Mapping[str, float],
+               votes: int | None = None) -> Detection:
+    c = seg[k]
+    center, size, yaw = _to_input_frame(seg, c)
+    return Detection(
+        id=0, label=label, score=score,
+        probabilities={n: float(p) for n, p in scores.probabilities.items() if n != "none"},
+        costs=dict(costs), center=center, size=size, yaw=yaw,
+        point_indices=np.sort(cloud.index[c.point_indices]),
+        parts=_parts(seg, c, scores.classes[cls_name].assignment), cluster=k, votes=votes,
+    )
+
+
+#: A detection of another pass backs a cluster of the first when their points overlap
+#: at least this much (IoU), with the same label.
+VOTE_IOU = 0.5
+
+
+def _iou(a: NDArray, b: NDArray) -> float:
+    inter = len(np.intersect1d(a, b, assume_unique=True))
+    return inter / (len(a) + len(b) - inter) if inter else 0.0
+
+
+def majority_labels(
+    clusters: Sequence[NDArray[np.int64]],
+    first: Mapping[int, tuple[str, float]],
+    others: Sequence[Sequence[tuple[str, NDArray[np.int64], float]]],
+) -> dict[int, tuple[str, int, float]]:
+    """The labels a majority of passes gives the clusters of the first pass.
+
+    Parameters
+    ----------
+    clusters : sequence of (k,) int
+        Sorted point rows of each cluster of the first pass.
+    first : mapping of int to (label, score)
+        The first pass's detections, by cluster.
+    others : sequence of sequences of (label, rows, score)
+        The detections of every other pass (sorted rows).
+
+    Returns
+    -------
+    dict of int to (label, passes, mean score)
+        For each cluster that more than half of all passes label alike (a pass counts
+        when one of its detections of the label covers the cluster with point IoU ≥
+        ``VOTE_IOU``): the label, how many passes found it, their mean score.
+
+    Examples
+    --------
+    >>> a, b = np.arange(0, 10), np.arange(20, 30)
+    >>> majority_labels([a, b], {0: ("chair", 0.6)},
+    ...                 [[("chair", a, 0.4), ("table", b, 0.8)], [("table", b[1:], 0.5)]])
+    {0: ('chair', 2, 0.5), 1: ('table', 2, 0.65)}
+    """
+    need = (len(others) + 1) // 2 + 1
+    out: dict[int, tuple[str, int, float]] = {}
+    for k, rows in enumerate(clusters):
+        backing: dict[str, list[float]] = {}
+        if k in first:
+            backing[first[k][0]] = [first[k][1]]
+        for run in others:
+            best: dict[str, float] = {}
+            for label, det_rows, score in run:
+                if _iou(rows, det_rows) >= VOTE_IOU:
+                    best[label] = max(best.get(label, 0.0), score)
+            for label, score in best.items():
+                backing.setdefault(label, []).append(score)
+        winners = sorted(((len(v), label) for label, v in backing.items() if len(v) >= need),
+                         reverse=True)
+        if winners:
+            n, label = winners[0]
+            out[k] = (label, n, float(np.mean(backing[label])))
+    return out
+
+
+def _vote(cloud: PointCloud, seg: Segmentation, scores: list[ClusterScores],
+          choices: list[LabelChoice], found: list[Detection], others: list[list[Detection]],
+          ontology: Ontology) -> tuple[list[Detection], list[LabelChoice]]:
+    """Keep what a majority of the passes found (:func:`majority_labels`), on the first
+    pass's clusters: a detection only the first pass made goes, and one the first pass
+    missed but most of the others made comes back on the first pass's cluster."""
+    first = {d.cluster: d for d in found}
+    kept = majority_labels(
+        [np.sort(cloud.index[c.point_indices]) for c in seg],
+        {k: (d.label, d.score) for k, d in first.items()},
+        [[(d.label, d.point_indices, d.score) for d in run] for run in others],
+    )
+    passes = len(others) + 1
+    choices = list(choices)
+    out: list[Detection] = []
+    for k in first:
+        if k not in kept:
+            choices[k] = LabelChoice(None, choices[k].costs,
+                                     f"found by fewer than half of {passes} passes",
+                                     {"class": choices[k].extra["class"]})
+    for k, (label, n, score) in kept.items():
+        if k in first and first[k].label == label:
+            cls_name = choices[k].extra["class"]
+        else:
+            cls_name = next(o.name for o in ontology.classes if o.label == label and o.detect)
+            choices[k] = LabelChoice(label, choices[k].costs, "", {"class": cls_name})
+        out.append(_detection(cloud, seg, k, scores[k], label, cls_name, score,
+                              choices[k].costs, votes=n))
+    return out, choices

@@ -41,6 +41,9 @@ def detect(
         None, "--beta", help="Energy weight of the class probability (detect.beta)."),
     context: float | None = typer.Option(
         None, "--context", help="Seat-near-table pairwise strength (detect.context)."),
+    votes: int | None = typer.Option(
+        None, "--votes", help="Passes over the scan, a majority keeps a detection "
+        "(detect.votes; 3: fewer false detections, 3x the time)."),
     seed: int = typer.Option(0, "--seed", help="Seed of every random step."),
     explain_: bool = typer.Option(False, "--explain",
                                   help="Print every constraint's probability and the label costs."),
@@ -55,8 +58,8 @@ def detect(
     with reporting():
         cloud = read_cloud(path, format=format)
         result = run_detect(cloud, config=cfg, ontology=onto, room=room_arg, indoor=indoor,
-                            threshold=threshold, beta=beta, context=context, seed=seed, up=up,
-                            scale=scale)
+                            threshold=threshold, beta=beta, context=context, votes=votes,
+                            seed=seed, up=up, scale=scale)
         object_map = None
         if cad:
             from ..cad import fit_detections, write_object_map

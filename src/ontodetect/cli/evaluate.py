@@ -29,6 +29,7 @@ def detect_options(
     beta: float | None,
     context: float | None,
     seed: int,
+    votes: int | None = None,
 ) -> dict:
     """Keyword arguments of ``pipeline.detect`` from the options ``detect`` also has.
 
@@ -45,6 +46,7 @@ def detect_options(
         "threshold": threshold,
         "beta": beta,
         "context": context,
+        "votes": votes,
     }
     opts.update({k: v for k, v in given.items() if v is not None})
     return opts
@@ -111,6 +113,9 @@ def eval_(
     context: float | None = typer.Option(
         None, "--context", help="Seat-near-table pairwise strength (detect.context)."
     ),
+    votes: int | None = typer.Option(
+        None, "--votes", help="Passes over each scan, a majority keeps a detection (detect.votes)."
+    ),
     seed: int = typer.Option(0, "--seed", help="Seed of every random step."),
 ) -> None:
     """Evaluate detection on a labelled dataset: P, R, F1, AP per class, confusion, times."""
@@ -128,6 +133,7 @@ def eval_(
         beta,
         context,
         seed,
+        votes,
     )
     if save_detections and out is None:
         raise typer.BadParameter("needs --out REPORT_DIR", param_hint="--save-detections")
