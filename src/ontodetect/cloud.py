@@ -91,6 +91,11 @@ class PointCloud:
     def __setattr__(self, name: str, value: Any) -> None:
         raise AttributeError(f"PointCloud is immutable: cannot set {name!r}")
 
+    def __reduce__(self) -> tuple[Any, ...]:
+        # For worker processes: the read-only mappings travel as plain dicts.
+        return (_rebuild, (self.xyz, self.rgb, self.normals, dict(self.fields), self._index,
+                           dict(self.meta)))
+
     def __delattr__(self, name: str) -> None:
         raise AttributeError(f"PointCloud is immutable: cannot delete {name!r}")
 
@@ -259,6 +264,12 @@ def _as_colors(a: ArrayLike, n: int, copy: bool) -> NDArray[np.uint8]:
             raise InvalidParameterError("rgb", "values in 0..255", f"minimum {int(arr.min())}")
         return arr.astype(np.uint8)
     raise InvalidParameterError("rgb", "a numeric array", f"dtype {arr.dtype}")
+
+
+def _rebuild(xyz: NDArray[np.float64], rgb: NDArray[np.uint8] | None,
+             normals: NDArray[np.float64] | None, fields: dict[str, NDArray[Any]],
+             index: NDArray[np.int64] | None, meta: dict[str, Any]) -> PointCloud:
+    return PointCloud(xyz, rgb, normals, MappingProxyType(fields), index, MappingProxyType(meta))
 
 
 def point_cloud(

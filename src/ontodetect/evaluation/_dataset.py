@@ -21,7 +21,6 @@ the same way (DESIGN.md, "Scale").
 from __future__ import annotations
 
 import functools
-import multiprocessing
 import os
 import re
 import time
@@ -33,6 +32,7 @@ from typing import Any, TypeVar
 
 import numpy as np
 
+from .._parallel import pool_context
 from .._progress import progress
 from ..cloud import PointCloud
 from ..errors import (
@@ -529,12 +529,6 @@ T = TypeVar("T")
 R = TypeVar("R")
 
 
-def _pool_context() -> multiprocessing.context.BaseContext:
-    # Never fork: the parent may hold threads (BLAS, Open3D) that a fork would copy mid-lock.
-    methods = multiprocessing.get_all_start_methods()
-    return multiprocessing.get_context("forkserver" if "forkserver" in methods else "spawn")
-
-
 def _check_jobs(jobs: int) -> int:
     if isinstance(jobs, bool) or not isinstance(jobs, (int, np.integer)) or jobs < 0:
         raise InvalidParameterError("jobs", "a non-negative integer (0: one per CPU)", jobs)
@@ -558,7 +552,7 @@ def map_scenes(
                 advance(1)
             return results
         workers = min(jobs, len(units))
-        with ProcessPoolExecutor(max_workers=workers, mp_context=_pool_context()) as pool:
+        with ProcessPoolExecutor(max_workers=workers, mp_context=pool_context()) as pool:
             futures = {pool.submit(fn, unit): i for i, unit in enumerate(units)}
             for fut in as_completed(futures):
                 results[futures[fut]] = fut.result()
@@ -750,9 +744,11 @@ def evaluate_dataset(
     ontology = opts.get("ontology")
     class_ids = evaluation_classes(ontology)
     classes = list(dict.fromkeys(class_ids.values()))
+    # Scenes in parallel already use the CPUs: the passes of a vote stay in each worker.
+    per_scene = {"jobs": 1, **opts} if _check_jobs(jobs) > 1 and len(units) > 1 else opts
     work = functools.partial(
         evaluate_scene,
-        detect_options=opts,
+        detect_options=per_scene,
         detections_dir=detections_dir,
         save_dir=save_detections,
         class_ids=class_ids,
