@@ -3,7 +3,7 @@
 Usage::
 
     .venv/bin/python scripts/turn_report.py DATASET [--turns 0 90 180 270] [--seeds 0]
-        [--shift 0] [--votes 1] [--jobs 2] [--json OUT.json]
+        [--shift 0] [--votes 3] [--jobs 2] [--json OUT.json]
 
 Every scene of DATASET (any layout ``ontodetect eval`` reads) is detected once per turn
 and seed (the seed of the MSAC plane fits):
@@ -54,7 +54,7 @@ def run_one(unit: tuple, *, shift: float, votes: int) -> SceneResult:
     warnings.simplefilter("ignore", DataWarning)
     scene = load_scene(source)  # ground truth by row: the same whichever way it is turned
     cloud = scene.cloud.replace(xyz=turned(scene.cloud.xyz, degrees, shift))
-    result = detect(cloud, seed=seed, votes=votes)
+    result = detect(cloud, seed=seed, votes=votes, jobs=1)  # the scenes use the CPUs
     preds = [Instance.make(d.id, d.label, d.point_indices, d.score) for d in result.detections]
     return SceneResult(f"{source.name}@{degrees:g}s{seed}", preds, scene.gts, 0.0)
 
@@ -70,7 +70,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("dataset", type=Path)
     ap.add_argument("--turns", type=float, nargs="+", default=[0.0, 90.0, 180.0, 270.0])
     ap.add_argument("--shift", type=float, default=0.0)
-    ap.add_argument("--votes", type=int, default=1, help="passes per detection (detect.votes)")
+    ap.add_argument("--votes", type=int, default=3, help="passes per detection (detect.votes)")
     ap.add_argument("--seeds", type=int, nargs="+", default=[0])
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--json", type=Path)

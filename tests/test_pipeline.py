@@ -101,23 +101,21 @@ def test_majority_keeps_what_most_passes_found():
     from ontodetect.pipeline import majority_labels
 
     chair, table, lone = _rows(0, 10), _rows(20, 30), _rows(40, 50)
-    first = {0: ("chair", 0.6), 2: ("chair", 0.9)}
+    first = {0: "chair", 2: "chair"}
     others = [
-        [("chair", chair, 0.4), ("table", table, 0.8)],
-        [("table", table[1:], 0.5), ("chair", _rows(3, 13), 0.7)],  # IoU 7/13 with chair
+        [("chair", chair), ("table", table)],
+        [("table", table[1:]), ("chair", _rows(3, 13))],  # IoU 7/13 with the chair
     ]
     kept = majority_labels([chair, table, lone], first, others)
     # The chair: all three passes; the table: missed by the first pass, found by both
     # others; the lone chair only by the first pass: gone.
-    assert kept[0] == ("chair", 3, pytest.approx((0.6 + 0.4 + 0.7) / 3))
-    assert kept[1] == ("table", 2, pytest.approx(0.65))
-    assert 2 not in kept
+    assert kept == {0: ("chair", 3), 1: ("table", 2)}
     # Below the IoU needed a detection does not back a cluster.
-    assert majority_labels([chair], {}, [[("chair", _rows(6, 16), 1.0)]] * 2) == {}
+    assert majority_labels([chair], {}, [[("chair", _rows(6, 16))]] * 2) == {}
     # Passes that disagree on the label: the majority label wins.
-    split = [[("table", chair, 0.5)], [("table", chair, 0.5)], [("chair", chair, 0.5)]]
-    assert majority_labels([chair], {0: ("chair", 0.5)}, split) == {}
-    assert majority_labels([chair], {0: ("table", 0.5)}, split)[0][0] == "table"
+    split = [[("table", chair)], [("table", chair)], [("chair", chair)]]
+    assert majority_labels([chair], {0: "chair"}, split) == {}
+    assert majority_labels([chair], {0: "table"}, split) == {0: ("table", 3)}
 
 
 def test_vote_turns_alternate():
@@ -130,10 +128,11 @@ def test_vote_turns_alternate():
 def test_votes_keep_detections_in_the_input_frame(dining):
     from ontodetect.config import Config
 
-    one = detect(dining)
+    one = detect(dining, votes=1)
     three = detect(dining, config=Config().replace(detect={"votes": 3}))
-    again = detect(dining, config=Config().replace(detect={"votes": 3}))
-    a, b = three.to_dict(), again.to_dict()
+    # Passes in worker processes or all here: the same result.
+    here = detect(dining, config=Config().replace(detect={"votes": 3}), jobs=1)
+    a, b = three.to_dict(), here.to_dict()
     a.pop("timings"), b.pop("timings")
     assert a == b
     assert "votes" in three.timings
@@ -150,6 +149,29 @@ def test_votes_keep_detections_in_the_input_frame(dining):
         assert np.all(d.center[:2] > pts[:, :2].min(axis=0))
         assert np.all(d.center[:2] < pts[:, :2].max(axis=0))
     assert all(d.votes is None for d in one.detections)
+    # A cloud denser than detect.vote_max_points gets one pass.
+    dense = detect(dining, config=Config().replace(detect={"vote_max_points": 1000}))
+    assert [d.to_dict() for d in dense.detections] == [d.to_dict() for d in one.detections]
     label, instance = three.point_labels()
     assert set(label[instance > 0]) == {three.class_names.index(d.label) for d in three.detections}
     assert set(np.unique(instance)) == {0, *(d.id for d in three.detections)}
+
+
+def test_vote_workers_fork_only_when_safe():
+    import threading
+
+    from ontodetect.pipeline import _vote_workers
+
+    assert _vote_workers(1, 2) == 0 and _vote_workers(0, 2) == 0 and _vote_workers(4, 0) == 0
+    assert _vote_workers(4, 2) == 2 and _vote_workers(2, 4) == 2
+    # Another thread in this process: no fork, the passes run here.
+    stop = threading.Event()
+    other = threading.Thread(target=stop.wait)
+    other.start()
+    try:
+        assert _vote_workers(4, 2) == 0
+    finally:
+        stop.set()
+        other.join()
+    with pytest.raises(InvalidParameterError, match="'jobs'"):
+        _vote_workers(-1, 2)

@@ -455,11 +455,16 @@ class DetectConfig(_Section):
     # clusters enough to make or break a detection. A majority of passes over the scan
     # turned by a fraction of a degree keeps what does not depend on the grid.
     votes: int = _param(
-        1, Interval(1, 15, "both", integer=True),
+        3, Interval(1, 15, "both", integer=True),
         "Passes over the scan, each turned by vote_turn more; a majority keeps a detection.",
     )
     vote_turn: float = _param(
         0.7, Interval(0.0, 45.0, "neither"), "Turn (deg) between the passes of a vote."
+    )
+    # Every pass holds its own voxels and clusters: a dense scan gets one.
+    vote_max_points: int = _param(
+        2_000_000, Interval(0, 10**12, "both", integer=True),
+        "Clouds with more points than this get a single pass.",
     )
 
 

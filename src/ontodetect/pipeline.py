@@ -10,15 +10,18 @@ of DESIGN.md.
 from __future__ import annotations
 
 import math
+import threading
 import time
 from collections.abc import Mapping, Sequence
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ._progress import progress
+from ._parallel import cpu_count, fork_context
+from ._progress import progress, use_reporter
 from .cloud import PointCloud
 from .config import Config
 from .errors import InvalidParameterError
@@ -298,6 +301,7 @@ def detect(
     none_likelihood: float | None = None,
     context: float | None = None,
     votes: int | None = None,
+    jobs: int | None = None,
     seed: int = 0,
     up: str | Sequence[float] | None = None,
     scale: float | None = None,
@@ -323,7 +327,13 @@ def detect(
     votes : int, optional
         Override ``config.detect.votes``: passes over the scan, each turned by
         ``detect.vote_turn`` degrees more about the vertical; a detection stays when
-        more than half of them find it (:func:`majority_labels`).
+        more than half of them find it (:func:`majority_labels`). Clouds of more than
+        ``detect.vote_max_points`` points get one pass.
+    jobs : int, optional
+        Worker processes (forked) for the passes after the first, while this process
+        makes the first; 0 or 1: all in this process. By default one per CPU, where
+        the platform can fork and this process runs no other thread. The result does
+        not depend on it.
     seed : int
         Seed of every random step.
     up, scale :
@@ -358,15 +368,22 @@ def detect(
     opts = {"ontology": ontology, "priors": priors, "threshold": threshold, "beta": beta,
             "none_likelihood": none_likelihood, "context": context, "seed": seed, "up": up,
             "scale": scale}
-    seg, scores, choices, found, timings = _one_pass(cloud, config, **opts)
-    if d.votes > 1:
-        t0 = time.perf_counter()
-        others = []
-        for turn in vote_turns(d.votes, d.vote_turn):
-            turned = config.replace(prepare={"turn": config.prepare.turn + turn})
-            others.append(_one_pass(cloud, turned, **opts)[3])
+    passes = d.votes if len(cloud) <= d.vote_max_points else 1
+    turned = [config.replace(prepare={"turn": config.prepare.turn + t})
+              for t in vote_turns(passes, d.vote_turn)]
+    workers = _vote_workers(jobs, len(turned))
+    t0 = time.perf_counter()
+    if workers:
+        with ProcessPoolExecutor(max_workers=workers, mp_context=fork_context()) as pool:
+            futures = [pool.submit(_pass_detections, cloud, c, opts) for c in turned]
+            seg, scores, choices, found, timings = _one_pass(cloud, config, **opts)
+            others = [f.result() for f in futures]
+    else:
+        seg, scores, choices, found, timings = _one_pass(cloud, config, **opts)
+        others = [_pass_detections(cloud, c, opts) for c in turned]
+    if turned:
         found, choices = _vote(cloud, seg, scores, choices, found, others, ontology)
-        timings["votes"] = time.perf_counter() - t0
+        timings["votes"] = time.perf_counter() - t0 - sum(timings.values())
     found.sort(key=lambda d: (-d.score, d.cluster))
     detections = [Detection(**{**d.__dict__, "id": i + 1}) for i, d in enumerate(found)]
     return Result(cloud=cloud, detections=detections, segmentation=seg, scores=scores,
@@ -380,6 +397,25 @@ def vote_turns(votes: int, step: float) -> list[float]:
     [0.7, -0.7, 1.4, -1.4]
     """
     return [step * ((i + 1) // 2) * (1 if i % 2 else -1) for i in range(1, votes)]
+
+
+def _vote_workers(jobs: int | None, passes: int) -> int:
+    """Worker processes for ``passes`` extra passes (0: make them in this process)."""
+    if jobs is not None and (isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 0):
+        raise InvalidParameterError("jobs", "a non-negative integer or None", jobs)
+    available = cpu_count() if jobs is None else jobs
+    # Forking copies only the calling thread: with other threads about (a GUI, a robot's
+    # node), whatever they hold stays held in the copy. Then the passes run here.
+    if not passes or available < 2 or fork_context() is None or threading.active_count() > 1:
+        return 0
+    return min(passes, available)
+
+
+def _pass_detections(cloud: PointCloud, config: Config, opts: Mapping[str, Any]
+                     ) -> list[Detection]:
+    """The detections of one pass (a unit of work for a worker process)."""
+    with use_reporter(None):  # a forked worker must not draw the parent's progress bars
+        return _one_pass(cloud, config, **opts)[3]
 
 
 def _one_pass(cloud: PointCloud, config: Config, *, ontology: Ontology,
@@ -438,52 +474,44 @@ def _iou(a: NDArray, b: NDArray) -> float:
 
 def majority_labels(
     clusters: Sequence[NDArray[np.int64]],
-    first: Mapping[int, tuple[str, float]],
-    others: Sequence[Sequence[tuple[str, NDArray[np.int64], float]]],
-) -> dict[int, tuple[str, int, float]]:
+    first: Mapping[int, str],
+    others: Sequence[Sequence[tuple[str, NDArray[np.int64]]]],
+) -> dict[int, tuple[str, int]]:
     """The labels a majority of passes gives the clusters of the first pass.
 
     Parameters
     ----------
     clusters : sequence of (k,) int
         Sorted point rows of each cluster of the first pass.
-    first : mapping of int to (label, score)
-        The first pass's detections, by cluster.
-    others : sequence of sequences of (label, rows, score)
+    first : mapping of int to str
+        The first pass's labels, by cluster.
+    others : sequence of sequences of (label, rows)
         The detections of every other pass (sorted rows).
 
     Returns
     -------
-    dict of int to (label, passes, mean score)
+    dict of int to (label, passes)
         For each cluster that more than half of all passes label alike (a pass counts
         when one of its detections of the label covers the cluster with point IoU ≥
-        ``VOTE_IOU``): the label, how many passes found it, their mean score.
+        ``VOTE_IOU``): the label and how many passes found it.
 
     Examples
     --------
     >>> a, b = np.arange(0, 10), np.arange(20, 30)
-    >>> majority_labels([a, b], {0: ("chair", 0.6)},
-    ...                 [[("chair", a, 0.4), ("table", b, 0.8)], [("table", b[1:], 0.5)]])
-    {0: ('chair', 2, 0.5), 1: ('table', 2, 0.65)}
+    >>> majority_labels([a, b], {0: "chair"}, [[("chair", a), ("table", b)], [("table", b[1:])]])
+    {0: ('chair', 2), 1: ('table', 2)}
     """
     need = (len(others) + 1) // 2 + 1
-    out: dict[int, tuple[str, int, float]] = {}
+    out: dict[int, tuple[str, int]] = {}
     for k, rows in enumerate(clusters):
-        backing: dict[str, list[float]] = {}
-        if k in first:
-            backing[first[k][0]] = [first[k][1]]
+        backing: dict[str, int] = {first[k]: 1} if k in first else {}
         for run in others:
-            best: dict[str, float] = {}
-            for label, det_rows, score in run:
-                if _iou(rows, det_rows) >= VOTE_IOU:
-                    best[label] = max(best.get(label, 0.0), score)
-            for label, score in best.items():
-                backing.setdefault(label, []).append(score)
-        winners = sorted(((len(v), label) for label, v in backing.items() if len(v) >= need),
-                         reverse=True)
+            for label in {label for label, det_rows in run if _iou(rows, det_rows) >= VOTE_IOU}:
+                backing[label] = backing.get(label, 0) + 1
+        winners = sorted(((n, label) for label, n in backing.items() if n >= need), reverse=True)
         if winners:
             n, label = winners[0]
-            out[k] = (label, n, float(np.mean(backing[label])))
+            out[k] = (label, n)
     return out
 
 
@@ -496,8 +524,8 @@ def _vote(cloud: PointCloud, seg: Segmentation, scores: list[ClusterScores],
     first = {d.cluster: d for d in found}
     kept = majority_labels(
         [np.sort(cloud.index[c.point_indices]) for c in seg],
-        {k: (d.label, d.score) for k, d in first.items()},
-        [[(d.label, d.point_indices, d.score) for d in run] for run in others],
+        {k: d.label for k, d in first.items()},
+        [[(d.label, d.point_indices) for d in run] for run in others],
     )
     passes = len(others) + 1
     choices = list(choices)
@@ -507,12 +535,12 @@ def _vote(cloud: PointCloud, seg: Segmentation, scores: list[ClusterScores],
             choices[k] = LabelChoice(None, choices[k].costs,
                                      f"found by fewer than half of {passes} passes",
                                      {"class": choices[k].extra["class"]})
-    for k, (label, n, score) in kept.items():
+    for k, (label, n) in kept.items():
         if k in first and first[k].label == label:
             cls_name = choices[k].extra["class"]
         else:
             cls_name = next(o.name for o in ontology.classes if o.label == label and o.detect)
             choices[k] = LabelChoice(label, choices[k].costs, "", {"class": cls_name})
-        out.append(_detection(cloud, seg, k, scores[k], label, cls_name, score,
-                              choices[k].costs, votes=n))
+        out.append(_detection(cloud, seg, k, scores[k], label, cls_name,
+                              float(scores[k].probabilities[cls_name]), choices[k].costs, votes=n))
     return out, choices
