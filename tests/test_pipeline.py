@@ -169,7 +169,8 @@ def test_vote_workers_fork_only_when_safe():
     other = threading.Thread(target=stop.wait)
     other.start()
     try:
-        assert _vote_workers(4, 2) == 0
+        assert _vote_workers(None, 2) == 0
+        assert _vote_workers(4, 2) == 2  # asked for: the caller knows its threads
     finally:
         stop.set()
         other.join()

@@ -331,9 +331,9 @@ def detect(
         ``detect.vote_max_points`` points get one pass.
     jobs : int, optional
         Worker processes (forked) for the passes after the first, while this process
-        makes the first; 0 or 1: all in this process. By default one per CPU, where
-        the platform can fork and this process runs no other thread. The result does
-        not depend on it.
+        makes the first; 0 or 1: all in this process. By default one per CPU where the
+        platform can fork, if this process runs no other thread (a number given here
+        forks anyway). The result does not depend on it.
     seed : int
         Seed of every random step.
     up, scale :
@@ -403,12 +403,16 @@ def _vote_workers(jobs: int | None, passes: int) -> int:
     """Worker processes for ``passes`` extra passes (0: make them in this process)."""
     if jobs is not None and (isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 0):
         raise InvalidParameterError("jobs", "a non-negative integer or None", jobs)
-    available = cpu_count() if jobs is None else jobs
-    # Forking copies only the calling thread: with other threads about (a GUI, a robot's
-    # node), whatever they hold stays held in the copy. Then the passes run here.
-    if not passes or available < 2 or fork_context() is None or threading.active_count() > 1:
+    if not passes or fork_context() is None:
         return 0
-    return min(passes, available)
+    if jobs is None:
+        # Forking copies only the calling thread: with other threads about (a GUI, a
+        # robot's node), whatever they hold stays held in the copy. Then, unless the
+        # caller asks for workers, the passes run here.
+        if threading.active_count() > 1:
+            return 0
+        jobs = cpu_count()
+    return min(passes, jobs) if jobs > 1 else 0
 
 
 def _pass_detections(cloud: PointCloud, config: Config, opts: Mapping[str, Any]
