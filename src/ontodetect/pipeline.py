@@ -58,7 +58,8 @@ class Detection:
     label : str
         Class name from the ontology.
     score : float
-        P_obj|ont of the label.
+        P_obj|ont of the label (in the first pass: an object the other passes of a
+        vote found may score below the decision threshold there).
     probabilities, costs : mapping of str to float
         P_obj|ont and energy U of every class.
     center, size : (3,) float
