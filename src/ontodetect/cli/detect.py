@@ -43,7 +43,7 @@ def detect(
         None, "--context", help="Seat-near-table pairwise strength (detect.context)."),
     votes: int | None = typer.Option(
         None, "--votes", help="Passes over the scan, a majority keeps a detection "
-        "(detect.votes; 3: fewer false detections, 3x the time)."),
+        "(detect.votes, default 3; 1: one pass, about half the time)."),
     seed: int = typer.Option(0, "--seed", help="Seed of every random step."),
     explain_: bool = typer.Option(False, "--explain",
                                   help="Print every constraint's probability and the label costs."),

@@ -114,7 +114,8 @@ def eval_(
         None, "--context", help="Seat-near-table pairwise strength (detect.context)."
     ),
     votes: int | None = typer.Option(
-        None, "--votes", help="Passes over each scan, a majority keeps a detection (detect.votes)."
+        None, "--votes", help="Passes over each scan, a majority keeps a detection "
+        "(detect.votes, default 3)."
     ),
     seed: int = typer.Option(0, "--seed", help="Seed of every random step."),
 ) -> None:
