@@ -507,16 +507,27 @@ def majority_labels(
     {0: ('chair', 2), 1: ('table', 2)}
     """
     need = (len(others) + 1) // 2 + 1
-    out: dict[int, tuple[str, int]] = {}
+    backing: list[dict[str, int]] = [{first[k]: 1} if k in first else {}
+                                     for k in range(len(clusters))]
+    # Which cluster holds each row: a detection is compared with the clusters it touches.
+    top = max([int(r[-1]) for r in clusters if len(r)]
+              + [int(d[-1]) for run in others for _, d in run if len(d)], default=-1)
+    owner = np.full(top + 1, -1, dtype=np.int64)
     for k, rows in enumerate(clusters):
-        backing: dict[str, int] = {first[k]: 1} if k in first else {}
-        for run in others:
-            for label in {label for label, det_rows in run if _iou(rows, det_rows) >= VOTE_IOU}:
-                backing[label] = backing.get(label, 0) + 1
-        winners = sorted(((n, label) for label, n in backing.items() if n >= need), reverse=True)
+        owner[rows] = k
+    for run in others:
+        found: set[tuple[int, str]] = set()
+        for label, det_rows in run:
+            for k in np.unique(owner[det_rows]):
+                if k >= 0 and _iou(clusters[k], det_rows) >= VOTE_IOU:
+                    found.add((int(k), label))
+        for k, label in found:
+            backing[k][label] = backing[k].get(label, 0) + 1
+    out: dict[int, tuple[str, int]] = {}
+    for k, votes in enumerate(backing):
+        winners = sorted(((n, label) for label, n in votes.items() if n >= need), reverse=True)
         if winners:
-            n, label = winners[0]
-            out[k] = (label, n)
+            out[k] = (winners[0][1], winners[0][0])
     return out
 
 
