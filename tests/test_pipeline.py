@@ -176,3 +176,19 @@ def test_vote_workers_fork_only_when_safe():
         other.join()
     with pytest.raises(InvalidParameterError, match="'jobs'"):
         _vote_workers(-1, 2)
+
+
+def _tiny_detections(_):
+    from ontodetect.synth import synthesize
+
+    return sorted(d.label for d in detect(synthesize("tiny", seed=1).cloud).detections)
+
+
+def test_votes_inside_a_pool_worker():
+    # multiprocessing.Pool workers are daemonic and may not fork: the passes run there.
+    import multiprocessing
+
+    if "fork" not in multiprocessing.get_all_start_methods():
+        pytest.skip("needs fork")
+    with multiprocessing.get_context("fork").Pool(1) as pool:
+        assert pool.map(_tiny_detections, [0]) == [_tiny_detections(0)]

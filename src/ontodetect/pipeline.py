@@ -10,6 +10,7 @@ of DESIGN.md.
 from __future__ import annotations
 
 import math
+import multiprocessing
 import threading
 import time
 from collections.abc import Mapping, Sequence
@@ -404,8 +405,8 @@ def _vote_workers(jobs: int | None, passes: int) -> int:
     """Worker processes for ``passes`` extra passes (0: make them in this process)."""
     if jobs is not None and (isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 0):
         raise InvalidParameterError("jobs", "a non-negative integer or None", jobs)
-    if not passes or fork_context() is None:
-        return 0
+    if not passes or fork_context() is None or multiprocessing.current_process().daemon:
+        return 0  # a daemonic worker (multiprocessing.Pool) may not have children
     if jobs is None:
         # Forking copies only the calling thread: with other threads about (a GUI, a
         # robot's node), whatever they hold stays held in the copy. Then, unless the
