@@ -371,7 +371,7 @@ def detect(
             "none_likelihood": none_likelihood, "context": context, "seed": seed, "up": up,
             "scale": scale}
     passes = d.votes if len(cloud) <= d.vote_max_points else 1
-    turned = [config.replace(prepare={"turn": config.prepare.turn + t})
+    turned = [config.replace(prepare={"turn": (config.prepare.turn + t + 180.0) % 360.0 - 180.0})
               for t in vote_turns(passes, d.vote_turn)]
     workers = _vote_workers(jobs, len(turned))
     t0 = time.perf_counter()
