@@ -129,7 +129,7 @@ def tiny_chunks(monkeypatch):
         monkeypatch.setattr(_chunks, "CHUNK_BYTES", rows * size)
         monkeypatch.setattr(_chunks, "PARALLEL_MIN_BYTES", 1)
         monkeypatch.setattr(_chunks, "READ_THREADS", threads)
-        monkeypatch.setattr(_chunks, "_usable_cpus", lambda: threads)
+        monkeypatch.setattr(_chunks, "cpu_count", lambda: threads)
 
     return use
 

@@ -15,7 +15,6 @@ chunks.
 
 from __future__ import annotations
 
-import os
 import threading
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
@@ -25,6 +24,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from .._parallel import cpu_count
 from .._progress import progress
 from ..errors import CorruptFileError, InvalidParameterError, ReadError
 
@@ -62,13 +62,6 @@ def _positive(name: str, value: int) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
         raise InvalidParameterError(name, "a whole number >= 1", value)
     return int(value)
-
-
-def _usable_cpus() -> int:
-    """CPUs this process may run on (fewer than the machine's under an affinity mask)."""
-    if hasattr(os, "sched_getaffinity"):
-        return max(1, len(os.sched_getaffinity(0)))
-    return os.cpu_count() or 1
 
 
 def read_records(
@@ -144,7 +137,7 @@ def read_records(
     chunk_rows = min(_positive("chunk_rows", chunk_rows), count)
     if threads is None:
         threads = READ_THREADS if count * size >= PARALLEL_MIN_BYTES else 1
-        threads = min(threads, _usable_cpus())
+        threads = min(threads, cpu_count())
     chunks = -(-count // chunk_rows)
     threads = min(_positive("threads", threads), chunks)
 
