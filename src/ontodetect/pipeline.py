@@ -9,6 +9,7 @@ of DESIGN.md.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import multiprocessing
 import threading
@@ -26,6 +27,7 @@ from ._progress import progress, use_reporter
 from .cloud import PointCloud
 from .config import Config
 from .errors import InvalidParameterError
+from .evaluation._match import Instance, overlap_matrix
 from .labeling import LabelChoice, label_clusters
 from .ontology import (
     ClusterDescription,
@@ -184,8 +186,6 @@ class Result:
 
 def with_cad(result: Result, fits: Sequence[Any]) -> Result:
     """The result with each detection's ``cad`` entry filled from its CAD fit (same order)."""
-    import dataclasses
-
     from .cad import cad_dict
 
     if len(fits) != len(result.detections):
@@ -473,11 +473,6 @@ def _detection(cloud: PointCloud, seg: Segmentation, k: int, scores: ClusterScor
 VOTE_IOU = 0.5
 
 
-def _iou(a: NDArray, b: NDArray) -> float:
-    inter = len(np.intersect1d(a, b, assume_unique=True))
-    return inter / (len(a) + len(b) - inter) if inter else 0.0
-
-
 def majority_labels(
     clusters: Sequence[NDArray[np.int64]],
     first: Mapping[int, str],
@@ -510,18 +505,13 @@ def majority_labels(
     need = (len(others) + 1) // 2 + 1
     backing: list[dict[str, int]] = [{first[k]: 1} if k in first else {}
                                      for k in range(len(clusters))]
-    # Which cluster holds each row: a detection is compared with the clusters it touches.
-    top = max([int(r[-1]) for r in clusters if len(r)]
-              + [int(d[-1]) for run in others for _, d in run if len(d)], default=-1)
-    owner = np.full(top + 1, -1, dtype=np.int64)
-    for k, rows in enumerate(clusters):
-        owner[rows] = k
-    for run in others:
-        found: set[tuple[int, str]] = set()
-        for label, det_rows in run:
-            for k in np.unique(owner[det_rows]):
-                if k >= 0 and _iou(clusters[k], det_rows) >= VOTE_IOU:
-                    found.add((int(k), label))
+    dets = [Instance.make(i, label, rows)
+            for i, (label, rows) in enumerate(d for run in others for d in run)]
+    iou, _ = overlap_matrix(dets, [Instance.make(k, "", rows) for k, rows in enumerate(clusters)])
+    run_of = np.repeat(np.arange(len(others)), [len(run) for run in others])
+    for r in range(len(others)):
+        found = {(int(k), dets[i].label) for i in np.flatnonzero(run_of == r)
+                 for k in np.flatnonzero(iou[i] >= VOTE_IOU)}
         for k, label in found:
             backing[k][label] = backing[k].get(label, 0) + 1
     out: dict[int, tuple[str, int]] = {}
@@ -554,10 +544,10 @@ def _vote(cloud: PointCloud, seg: Segmentation, scores: list[ClusterScores],
                                      {"class": choices[k].extra["class"]})
     for k, (label, n) in kept.items():
         if k in first and first[k].label == label:
-            cls_name = choices[k].extra["class"]
-        else:
-            cls_name = next(o.name for o in ontology.classes if o.label == label and o.detect)
-            choices[k] = LabelChoice(label, choices[k].costs, "", {"class": cls_name})
+            out.append(dataclasses.replace(first[k], votes=n))
+            continue
+        cls_name = next(o.name for o in ontology.classes if o.label == label and o.detect)
+        choices[k] = LabelChoice(label, choices[k].costs, "", {"class": cls_name})
         out.append(_detection(cloud, seg, k, scores[k], label, cls_name,
                               float(scores[k].probabilities[cls_name]), choices[k].costs, votes=n))
     return out, choices
