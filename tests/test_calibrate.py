@@ -269,17 +269,7 @@ def test_constraint_values_are_the_features_of_the_best_assignment():
 
 # -- the nested check ----------------------------------------------------------------------
 def _chair_scene(name):
-    from ontodetect.evaluation import Instance
-    from ontodetect.evaluation._calibrate import ValidationScene
-
-    seat = _plane(2.0, 0.46, 0.45, 0.47, 0.45, 0.42, 0.17, (0.0, 0.0, 0.46))
-    back = _plane(85.0, 0.75, 0.5, 1.0, 0.45, 0.4, 0.16, (0.0, 0.2, 0.75))
-    relation = SimpleNamespace(angle=83.0, distance=0.02, xy_overlap=0.1)
-    desc = ClusterDescription([back, seat], {(0, 1): relation}, 0.55, 0.5, 1.0, 0.0)
-    members = np.arange(100)
-    return ValidationScene(
-        name, (desc,), np.zeros((1, 3)), (members,), (Instance.make(1, "chair", members),)
-    )
+    return _chair_at(name, 0.46, back_top=1.0)
 
 
 def test_a_change_that_lowers_validation_f1_is_rejected():
@@ -320,16 +310,17 @@ def test_one_room_cannot_be_checked_so_nothing_changes():
     assert accepted == set() and decisions == []
 
 
-def _chair_at(name, seat_height):
-    """A validation scene with one chair whose seat is at ``seat_height`` (backrest fixed)."""
+def _chair_at(name, seat_height, back_top=1.1):
+    """A validation scene with one chair whose seat is at ``seat_height``; its backrest
+    rises from 0.5 m to ``back_top``, the top of the chair."""
     from ontodetect.evaluation import Instance
     from ontodetect.evaluation._calibrate import ValidationScene
 
-    h = seat_height
+    h, mid = seat_height, (0.5 + back_top) / 2
     seat = _plane(2.0, h, h - 0.01, h + 0.01, 0.45, 0.42, 0.17, (0.0, 0.0, h))
-    back = _plane(85.0, 0.8, 0.5, 1.1, 0.45, 0.4, 0.16, (0.0, 0.2, 0.8))
+    back = _plane(85.0, mid, 0.5, back_top, 0.45, 0.4, 0.16, (0.0, 0.2, mid))
     relation = SimpleNamespace(angle=83.0, distance=0.02, xy_overlap=0.1)
-    desc = ClusterDescription([back, seat], {(0, 1): relation}, 0.55, 0.5, 1.1, 0.0)
+    desc = ClusterDescription([back, seat], {(0, 1): relation}, 0.55, 0.5, back_top, 0.0)
     members = np.arange(100)
     return ValidationScene(
         name, (desc,), np.zeros((1, 3)), (members,), (Instance.make(1, "chair", members),)
