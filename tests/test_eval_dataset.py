@@ -295,6 +295,7 @@ def test_a_scene_is_a_picklable_unit_of_work(dataset):
     bad = evaluate_scene(SceneSource("x", str(root / "x_vert.npy"), "scannet-votenet", "x"))
     assert not bad.ok and "x_vert.npy" in bad.error
     assert map_scenes(abs, [-3, 1, -2], jobs=1) == [3, 1, 2]
+    assert map_scenes(abs, [-3, 1, -2], jobs=0) == [3, 1, 2]  # one per usable CPU
     with pytest.raises(InvalidParameterError, match="'jobs' parameter"):
         map_scenes(abs, [1], jobs=-1)
     with pytest.raises(InvalidParameterError, match="detect_options"):

@@ -118,6 +118,25 @@ def test_majority_keeps_what_most_passes_found():
     assert majority_labels([chair], {0: "table"}, split) == {0: ("table", 3)}
 
 
+def test_pass_probabilities_average_the_covering_clusters():
+    from ontodetect.pipeline import pass_probabilities
+
+    chair, other = np.arange(100), np.arange(200, 300)
+    first = [{"chair": 0.1, "table": 0.2, "none": 0.7}, {"table": 0.6, "none": 0.4}]
+    others = [
+        # A cluster that covers the chair (IoU 0.9) and one beside it (IoU 0).
+        [(np.arange(10, 100), {"chair": 0.7, "none": 0.3}), (other + 50, {"table": 1.0})],
+        # Too little of the chair (IoU 0.4): this pass saw no object there.
+        [(np.arange(60, 100), {"chair": 0.9, "none": 0.1}), (other, {"table": 0.9, "none": 0.1})],
+    ]
+    got = pass_probabilities([chair, other], first, others)
+    assert got[0] == pytest.approx({"chair": 0.8 / 3, "table": 0.2 / 3, "none": 2.0 / 3})
+    # other + 50 covers half of it with IoU 1/3: below VOTE_IOU, a "none".
+    assert got[1] == pytest.approx({"table": 1.5 / 3, "none": 1.5 / 3})
+    assert all(sum(p.values()) == pytest.approx(1.0) for p in got)
+    assert pass_probabilities([], [], others) == []
+
+
 def test_vote_turns_alternate():
     from ontodetect.pipeline import vote_turns
 
@@ -142,6 +161,8 @@ def test_votes_keep_detections_in_the_input_frame(dining):
     names = {5: "chair", 6: "sofa", 7: "table", 14: "table"}
     for d in three.detections:
         assert d.votes in (2, 3) and d.to_dict()["votes"] == d.votes
+        # The probabilities are means over the passes, and the score is the label's.
+        assert d.score == d.probabilities[d.label] >= 0.15 * d.votes / 3
         ids, counts = np.unique(truth[d.point_indices], return_counts=True)
         assert names.get(int(ids[np.argmax(counts)])) == d.label, d
         # The box is in the input frame, around the object's points.
@@ -160,10 +181,13 @@ def test_votes_keep_detections_in_the_input_frame(dining):
 def test_vote_workers_fork_only_when_safe():
     import threading
 
+    from ontodetect._parallel import cpu_count
     from ontodetect.pipeline import _vote_workers
 
-    assert _vote_workers(1, 2) == 0 and _vote_workers(0, 2) == 0 and _vote_workers(4, 0) == 0
+    assert _vote_workers(1, 2) == 0 and _vote_workers(4, 0) == 0
     assert _vote_workers(4, 2) == 2 and _vote_workers(2, 4) == 2
+    # 0: one per usable CPU, as the evaluation's jobs=0.
+    assert _vote_workers(0, 2) == (min(2, cpu_count()) if cpu_count() > 1 else 0)
     # Another thread in this process: no fork, the passes run here.
     stop = threading.Event()
     other = threading.Thread(target=stop.wait)

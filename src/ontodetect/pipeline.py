@@ -43,7 +43,7 @@ from .segment import Cluster, Segmentation, segment
 
 __all__ = [
     "Detection", "Result", "describe_cluster", "describe_clusters", "detect", "majority_labels",
-    "shelter_heights", "vote_turns", "with_cad",
+    "pass_probabilities", "shelter_heights", "vote_turns", "with_cad",
 ]
 
 #: Format tag of detections.json.
@@ -61,10 +61,11 @@ class Detection:
     label : str
         Class name from the ontology.
     score : float
-        P_obj|ont of the label (in the first pass: an object the other passes of a
-        vote found may score below the decision threshold there).
+        P_obj|ont of the label (``probabilities[label's class]``).
     probabilities, costs : mapping of str to float
-        P_obj|ont and energy U of every class.
+        P_obj|ont and energy U of every class. With ``detect.votes`` > 1 the
+        probabilities are means over the passes (:func:`pass_probabilities`); the
+        costs are those of the first pass, whose clusters the detections keep.
     center, size : (3,) float
         Upright box centre and size (length, breadth, height).
     yaw : float
@@ -333,7 +334,8 @@ def detect(
         ``detect.vote_max_points`` points get one pass.
     jobs : int, optional
         Worker processes (forked) for the passes after the first, while this process
-        makes the first; 0 or 1: all in this process. By default one per CPU where the
+        makes the first; 1: all in this process; 0: one per usable CPU, as for
+        :func:`ontodetect.evaluation.evaluate_dataset`. By default one per CPU where the
         platform can fork, if this process runs no other thread (a number given here
         forks anyway). The result does not depend on it.
     seed : int
@@ -377,12 +379,12 @@ def detect(
     t0 = time.perf_counter()
     if workers:
         with ProcessPoolExecutor(max_workers=workers, mp_context=fork_context()) as pool:
-            futures = [pool.submit(_pass_detections, cloud, c, opts) for c in turned]
+            futures = [pool.submit(_pass_clusters, cloud, c, opts) for c in turned]
             seg, scores, choices, found, timings = _one_pass(cloud, config, **opts)
             others = [f.result() for f in futures]
     else:
         seg, scores, choices, found, timings = _one_pass(cloud, config, **opts)
-        others = [_pass_detections(cloud, c, opts) for c in turned]
+        others = [_pass_clusters(cloud, c, opts) for c in turned]
     if turned:
         found, choices = _vote(cloud, seg, scores, choices, found, others, ontology)
         timings["votes"] = time.perf_counter() - t0 - sum(timings.values())
@@ -413,23 +415,33 @@ def _vote_workers(jobs: int | None, passes: int) -> int:
         # caller asks for workers, the passes run here.
         if threading.active_count() > 1:
             return 0
-        jobs = cpu_count()
+        jobs = 0
+    jobs = jobs or cpu_count()
     return min(passes, jobs) if jobs > 1 else 0
 
 
-def _pass_detections(cloud: PointCloud, config: Config, opts: Mapping[str, Any]
-                     ) -> list[Detection]:
-    """The detections of one pass (a unit of work for a worker process)."""
+#: What the vote needs of a cluster of another pass: its sorted input rows, its
+#: P_obj|ont by class (with "none") and its label (None when it is no object).
+PassCluster = tuple[NDArray[np.int64], dict[str, float], str | None]
+
+
+def _pass_clusters(cloud: PointCloud, config: Config, opts: Mapping[str, Any]
+                   ) -> list[PassCluster]:
+    """Every cluster of one pass, as the vote needs it (a unit of work for a worker)."""
     with use_reporter(None):  # a forked worker must not draw the parent's progress bars
-        return _one_pass(cloud, config, **opts)[3]
+        seg, scores, choices, _, _ = _one_pass(cloud, config, found=False, **opts)
+    return [(np.sort(cloud.index[c.point_indices]), dict(s.probabilities), ch.label)
+            for c, s, ch in zip(seg, scores, choices)]
 
 
 def _one_pass(cloud: PointCloud, config: Config, *, ontology: Ontology,
               priors: Mapping[str, float], threshold: float, beta: float,
               none_likelihood: float, context: float, seed: int, up: Any, scale: Any,
+              found: bool = True,
               ) -> tuple[Segmentation, list[ClusterScores], list[LabelChoice], list[Detection],
                          dict[str, float]]:
-    """Segment, score and label once; detections numbered 0, in cluster order."""
+    """Segment, score and label once; detections (when ``found``) numbered 0, in cluster
+    order."""
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
     seg = segment(cloud, config, seed=seed, up=up, scale=scale)
@@ -448,20 +460,23 @@ def _one_pass(cloud: PointCloud, config: Config, *, ontology: Ontology,
     choices = label_clusters(scores, [c.planes for c in seg], ontology, beta=beta,
                              threshold=threshold, centers=centers, context=context)
     timings["label"] = time.perf_counter() - t0
-    found = [_detection(cloud, seg, k, scores[k], choice.label, choice.extra["class"],
-                        float(scores[k].probabilities[choice.extra["class"]]), choice.costs)
-             for k, choice in enumerate(choices) if choice.label is not None]
-    return seg, scores, choices, found, timings
+    detections = [_detection(cloud, seg, k, scores[k], choice.label, choice.extra["class"],
+                             choice.costs)
+                  for k, choice in enumerate(choices) if found and choice.label is not None]
+    return seg, scores, choices, detections, timings
 
 
 def _detection(cloud: PointCloud, seg: Segmentation, k: int, scores: ClusterScores,
-               label: str, cls_name: str, score: float, costs: Mapping[str, float],
-               votes: int | None = None) -> Detection:
+               label: str, cls_name: str, costs: Mapping[str, float], votes: int | None = None,
+               probabilities: Mapping[str, float] | None = None) -> Detection:
+    """Cluster ``k`` as a detection; its probabilities are the cluster's unless given."""
     c = seg[k]
+    if probabilities is None:
+        probabilities = scores.probabilities
     center, size, yaw = _to_input_frame(seg, c)
     return Detection(
-        id=0, label=label, score=score,
-        probabilities={n: float(p) for n, p in scores.probabilities.items() if n != "none"},
+        id=0, label=label, score=float(probabilities[cls_name]),
+        probabilities={n: float(p) for n, p in probabilities.items() if n != "none"},
         costs=dict(costs), center=center, size=size, yaw=yaw,
         point_indices=np.sort(cloud.index[c.point_indices]),
         parts=_parts(seg, c, scores.classes[cls_name].assignment), cluster=k, votes=votes,
@@ -522,17 +537,65 @@ def majority_labels(
     return out
 
 
+def pass_probabilities(
+    clusters: Sequence[NDArray[np.int64]],
+    first: Sequence[Mapping[str, float]],
+    others: Sequence[Sequence[tuple[NDArray[np.int64], Mapping[str, float]]]],
+) -> list[dict[str, float]]:
+    """P_obj|ont of clusters of the first pass, averaged over all the passes.
+
+    Parameters
+    ----------
+    clusters : sequence of (k,) int
+        Sorted point rows of the clusters of the first pass to average.
+    first : sequence of mappings of str to float
+        Their probabilities in the first pass (by class, with ``"none"``).
+    others : sequence of sequences of (rows, probabilities)
+        Every cluster of every other pass.
+
+    Returns
+    -------
+    list of dict
+        For each cluster, the mean over the passes of the probabilities of the cluster
+        of that pass that covers it with point IoU ≥ ``VOTE_IOU``; a pass with no such
+        cluster saw no object there and counts as ``{"none": 1}``.
+
+    Examples
+    --------
+    >>> a, b = np.arange(0, 10), np.arange(20, 30)
+    >>> p = pass_probabilities([a], [{"chair": 0.1, "none": 0.9}],
+    ...                        [[(a[1:], {"chair": 0.7, "none": 0.3})], [(b, {"chair": 1.0})]])
+    >>> {k: round(v, 3) for k, v in p[0].items()}
+    {'chair': 0.267, 'none': 0.733}
+    """
+    sums = [dict(p) for p in first]
+    if clusters:
+        mine = [Instance.make(k, "", rows) for k, rows in enumerate(clusters)]
+        for run in others:
+            theirs = [Instance.make(j, "", rows) for j, (rows, _) in enumerate(run)]
+            iou = overlap_matrix(mine, theirs)[0] if theirs else np.zeros((len(mine), 0))
+            for k, total in enumerate(sums):
+                j = int(np.argmax(iou[k])) if iou.shape[1] else -1
+                seen = run[j][1] if j >= 0 and iou[k, j] >= VOTE_IOU else {"none": 1.0}
+                for name, p in seen.items():
+                    total[name] = total.get(name, 0.0) + float(p)
+    n = len(others) + 1
+    return [{name: total / n for name, total in s.items()} for s in sums]
+
+
 def _vote(cloud: PointCloud, seg: Segmentation, scores: list[ClusterScores],
-          choices: list[LabelChoice], found: list[Detection], others: list[list[Detection]],
+          choices: list[LabelChoice], found: list[Detection], others: list[list[PassCluster]],
           ontology: Ontology) -> tuple[list[Detection], list[LabelChoice]]:
     """Keep what a majority of the passes found (:func:`majority_labels`), on the first
     pass's clusters: a detection only the first pass made goes, and one the first pass
-    missed but most of the others made comes back on the first pass's cluster."""
+    missed but most of the others made comes back on the first pass's cluster. What is
+    kept carries the probabilities averaged over the passes (:func:`pass_probabilities`)."""
     first = {d.cluster: d for d in found}
+    rows = [np.sort(cloud.index[c.point_indices]) for c in seg]
     kept = majority_labels(
-        [np.sort(cloud.index[c.point_indices]) for c in seg],
+        rows,
         {k: d.label for k, d in first.items()},
-        [[(d.label, d.point_indices) for d in run] for run in others],
+        [[(label, r) for r, _, label in run if label is not None] for run in others],
     )
     passes = len(others) + 1
     choices = list(choices)
@@ -542,12 +605,19 @@ def _vote(cloud: PointCloud, seg: Segmentation, scores: list[ClusterScores],
             choices[k] = LabelChoice(None, choices[k].costs,
                                      f"found by fewer than half of {passes} passes",
                                      {"class": choices[k].extra["class"]})
-    for k, (label, n) in kept.items():
+    ks = sorted(kept)
+    means = pass_probabilities([rows[k] for k in ks], [scores[k].probabilities for k in ks],
+                               [[(r, p) for r, p, _ in run] for run in others])
+    for k, mean in zip(ks, means):
+        label, n = kept[k]
+        probabilities = {name: p for name, p in mean.items() if name != "none"}
         if k in first and first[k].label == label:
-            out.append(dataclasses.replace(first[k], votes=n))
+            cls_name = choices[k].extra["class"]
+            out.append(dataclasses.replace(first[k], votes=n, probabilities=probabilities,
+                                           score=probabilities[cls_name]))
             continue
         cls_name = next(o.name for o in ontology.classes if o.label == label and o.detect)
         choices[k] = LabelChoice(label, choices[k].costs, "", {"class": cls_name})
-        out.append(_detection(cloud, seg, k, scores[k], label, cls_name,
-                              float(scores[k].probabilities[cls_name]), choices[k].costs, votes=n))
+        out.append(_detection(cloud, seg, k, scores[k], label, cls_name, choices[k].costs,
+                              votes=n, probabilities=mean))
     return out, choices

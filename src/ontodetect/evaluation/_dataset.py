@@ -32,7 +32,7 @@ from typing import Any, TypeVar
 
 import numpy as np
 
-from .._parallel import pool_context
+from .._parallel import cpu_count, pool_context
 from .._progress import progress
 from ..cloud import PointCloud
 from ..errors import (
@@ -532,7 +532,7 @@ R = TypeVar("R")
 def _check_jobs(jobs: int) -> int:
     if isinstance(jobs, bool) or not isinstance(jobs, (int, np.integer)) or jobs < 0:
         raise InvalidParameterError("jobs", "a non-negative integer (0: one per CPU)", jobs)
-    return int(jobs) or (os.cpu_count() or 1)
+    return int(jobs) or cpu_count()
 
 
 def map_scenes(
