@@ -9,13 +9,16 @@ from __future__ import annotations
 
 import numpy as np
 
+from ontodetect.config import Config
+
 #: remove_statistical_outlier(nb_neighbors, std_ratio).
 O3D_SOR = (20, 2.0)
 #: cluster_dbscan(eps, min_points): Table 4.1's 5 cm radius.
 O3D_DBSCAN = (0.05, 10)
 #: segment_plane(distance_threshold, ransac_n, num_iterations): Table 4.1's 1 cm.
 O3D_PLANE = (0.01, 3, 1000)
-O3D_MAX_PLANES = 8
+#: As many planes per cluster as ontodetect extracts (``planes.max_planes``).
+O3D_MAX_PLANES = Config().planes.max_planes
 O3D_MIN_CLUSTER = 100
 O3D_MIN_PLANE = 30
 #: Table 4.1: objects are searched below 1.4 m.
