@@ -34,6 +34,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
+from .._transforms import yaw_pose as pose_matrix
 from ..errors import InvalidParameterError
 
 __all__ = [
@@ -69,21 +70,6 @@ ACCELERATION = 2.0
 REACH_SAMPLE = 500
 #: Total weight below which a hypothesis has nothing to align and keeps its pose.
 MIN_WEIGHT = 1e-9
-
-
-def pose_matrix(x: float, y: float, yaw: float, z: float = 0.0) -> NDArray[np.float64]:
-    """4x4 rigid transform: rotation by ``yaw`` about z, then translation (x, y, z).
-
-    Examples
-    --------
-    >>> pose_matrix(1.0, 2.0, np.pi / 2).round(6)[:3, 3].tolist()
-    [1.0, 2.0, 0.0]
-    """
-    c, s = np.cos(yaw), np.sin(yaw)
-    T = np.eye(4)
-    T[0, 0], T[0, 1], T[1, 0], T[1, 1] = c, -s, s, c
-    T[:3, 3] = (x, y, z)
-    return T
 
 
 def yaw_procrustes(

@@ -17,6 +17,7 @@ Every step is also a public function on arrays.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 from typing import Any
@@ -25,6 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._progress import progress
+from .._transforms import yaw_pose
 from ..cloud import PointCloud, point_cloud
 from ..config import Config
 from ..errors import InvalidParameterError
@@ -42,7 +44,6 @@ from ._gravity import (
     level_transform,
     manhattan_axes,
     rotation_between,
-    turn_about_z,
 )
 from ._structure import STRUCTURE_LABELS, StructurePlane, find_structure
 from ._surface import estimate_normals, graph_normals, smooth_surface
@@ -78,7 +79,6 @@ __all__ = [
     "smooth_surface",
     "statistical_outlier_mask",
     "surface_spacing",
-    "turn_about_z",
     "voxelize",
 ]
 
@@ -463,7 +463,7 @@ def prepare(
         floor = FloorFit(u, floor.offset, floor.area, floor.found)
     to_level = level_transform(floor.normal, floor.offset, k_s)
     if cfg.turn:
-        to_level = turn_about_z(cfg.turn) @ to_level
+        to_level = yaw_pose(0.0, 0.0, math.radians(cfg.turn)) @ to_level
     R = to_level[:3, :3] / k_s
     shift = to_level[:3, 3]
     rotated = float(np.linalg.norm(R - np.eye(3))) > IDENTITY_TOLERANCE

@@ -29,7 +29,6 @@ __all__ = [
     "level_transform",
     "manhattan_axes",
     "rotation_between",
-    "turn_about_z",
 ]
 
 #: Named up directions accepted by :func:`estimate_up` and ``prepare(up=...)``.
@@ -455,20 +454,6 @@ def rotation_between(a: ArrayLike, b: ArrayLike) -> NDArray[np.float64]:
     k = w / s
     K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
     return np.eye(3) + s * K + (1 - c) * (K @ K)
-
-
-def turn_about_z(degrees: float) -> NDArray[np.float64]:
-    """4x4 rotation by ``degrees`` about the z axis (counter-clockwise seen from above).
-
-    Examples
-    --------
-    >>> np.round(turn_about_z(90.0) @ [1.0, 0.0, 0.5, 1.0], 6).tolist()
-    [0.0, 1.0, 0.5, 1.0]
-    """
-    a = np.radians(float(degrees))
-    T = np.eye(4)
-    T[:2, :2] = [[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]]
-    return T
 
 
 def level_transform(up: ArrayLike, floor_offset: float, scale: float = 1.0) -> NDArray[np.float64]:

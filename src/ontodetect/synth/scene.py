@@ -19,6 +19,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._transforms import yaw_pose
+
 __all__ = [
     "CLASS_IDS",
     "CLASS_NAMES",
@@ -60,23 +62,6 @@ CLASS_IDS: dict[str, int] = {
 }
 #: Id -> class name.
 CLASS_NAMES: dict[int, str] = {v: k for k, v in CLASS_IDS.items()}
-
-
-def yaw_pose(x: float, y: float, yaw: float, z: float = 0.0) -> NDArray[np.float64]:
-    """4x4 rigid transform: rotation by ``yaw`` (radians) about z, then translation.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> T = yaw_pose(1.0, 2.0, np.pi / 2)
-    >>> np.round(T @ [1, 0, 0, 1], 6).tolist()
-    [1.0, 3.0, 0.0, 1.0]
-    """
-    c, s = np.cos(yaw), np.sin(yaw)
-    T = np.eye(4)
-    T[:2, :2] = [[c, -s], [s, c]]
-    T[:3, 3] = [x, y, z]
-    return T
 
 
 @dataclass(frozen=True)
