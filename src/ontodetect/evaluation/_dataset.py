@@ -745,7 +745,8 @@ def evaluate_dataset(
     class_ids = evaluation_classes(ontology)
     classes = list(dict.fromkeys(class_ids.values()))
     # Scenes in parallel already use the CPUs: the passes of a vote stay in each worker.
-    per_scene = {"jobs": 1, **opts} if _check_jobs(jobs) > 1 and len(units) > 1 else opts
+    workers = _check_jobs(jobs)
+    per_scene = {"jobs": 1, **opts} if workers > 1 and len(units) > 1 else opts
     work = functools.partial(
         evaluate_scene,
         detect_options=per_scene,
@@ -753,7 +754,7 @@ def evaluate_dataset(
         save_dir=save_detections,
         class_ids=class_ids,
     )
-    outcomes = map_scenes(work, units, jobs=jobs, description="Evaluating scenes")
+    outcomes = map_scenes(work, units, jobs=workers, description="Evaluating scenes")
     if on_error == "raise":
         for o in outcomes:
             if not o.ok:
@@ -763,6 +764,6 @@ def evaluate_dataset(
         classes,
         dataset=str(path),
         options=describe_options(opts, detections_dir),
-        jobs=_check_jobs(jobs),
+        jobs=workers,
         seconds=time.perf_counter() - start,
     )
