@@ -46,6 +46,28 @@ def test_eval_writes_the_report_and_scores_stored_detections_alike(dataset, tmp_
     assert stored["options"] == {"detections": str(out / "detections")}
 
 
+def test_eval_turns_each_scene_and_reports_every_turn_and_the_pool(dataset, tmp_path, capsys):
+    out = tmp_path / "turned"
+    assert main(["eval", str(dataset), "-o", str(out), "--turns", "0,90", "--votes", "1"]) == 0
+    printed = capsys.readouterr().out
+    assert "4 scenes" in printed and "90°: chair P" in printed
+    doc = json.loads((out / "report.json").read_text(encoding="utf-8"))
+    assert [s["scene"] for s in doc["scenes"]] == [
+        "scene_0000@0deg", "scene_0000@90deg", "scene_0001@0deg", "scene_0001@90deg"
+    ]
+    assert doc["options"]["turns"] == [0.0, 90.0]
+    pooled = doc["evaluations"]["iou@0.25"]["per_class"]["chair"]
+    by_turn = {k: v["per_class"]["chair"] for k, v in doc["by_variant"].items()}
+    assert list(by_turn) == ["0°", "90°"] and pooled["num_gt"] == 4
+    assert pooled["tp"] == sum(m["tp"] for m in by_turn.values())
+    text = (out / "report.md").read_text(encoding="utf-8")
+    assert "## By run" in text and "| 90° |" in text and "| **pooled** |" in text
+    for bad in (["--turns", "0,x"], ["--seeds", "1,1"], ["--seeds", "0", "--detections", "d"]):
+        assert main(["eval", str(dataset), *bad]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("error:") and err.count("\n") == 1
+
+
 def test_eval_errors_are_one_line_and_status_2(tmp_path, capsys):
     assert main(["eval", str(tmp_path / "missing")]) == 2
     err = capsys.readouterr().err

@@ -300,3 +300,67 @@ def test_a_scene_is_a_picklable_unit_of_work(dataset):
         map_scenes(abs, [1], jobs=-1)
     with pytest.raises(InvalidParameterError, match="detect_options"):
         evaluate_dataset(root, detect_options={"colour": 1})
+
+
+# -- turned and reseeded runs ----------------------------------------------------------------
+def test_a_turned_scene_keeps_its_ground_truth_by_row_with_turned_centres(tmp_path):
+    root = make_votenet(tmp_path / "dev", ("scene0000_00",))
+    source = discover_scenes(root)[0]
+    plain, turned = load_scene(source), load_scene(source, turn=90.0)
+    assert [g.points.tolist() for g in turned.gts] == [g.points.tolist() for g in plain.gts]
+    # the chair spans x = 0..9 on y = 0: its box centre (4.5, 0) turns to (0, 4.5)
+    chair = next(g for g in turned.gts if g.label == "chair")
+    assert np.allclose(chair.center, [0.0, 4.5, 0.5], atol=1e-5)
+    assert np.allclose(turned.cloud.xyz[:, 1], plain.cloud.xyz[:, 0], atol=1e-5)
+
+
+@pytest.mark.filterwarnings("ignore:no floor found")  # a line of points: nothing to find
+def test_runs_per_turn_and_seed_are_named_pooled_and_reported_per_turn(tmp_path):
+    root = make_votenet(tmp_path / "dev", ("scene0000_00", "scene0001_00"))
+    ev = evaluate_dataset(root, turns=[0, 90], seeds=[0, 1], detect_options={"votes": 1})
+    assert [s.name for s in ev.scenes[:4]] == [
+        "scene0000_00@0deg-seed0", "scene0000_00@0deg-seed1",
+        "scene0000_00@90deg-seed0", "scene0000_00@90deg-seed1",
+    ]
+    assert [(s.turn, s.seed) for s in ev.scenes[:2]] == [(0.0, 0), (0.0, 1)]
+    assert list(ev.by_variant) == ["0°", "90°"]
+    # every run sees the whole ground truth: 2 scenes x 4 runs, one chair and one table each
+    assert ev.primary.per_class["chair"].num_gt == 8
+    assert all(e.per_class["table"].num_gt == 4 for e in ev.by_variant.values())
+    doc = ev.to_dict()
+    assert doc["options"]["turns"] == [0.0, 90.0] and doc["options"]["seeds"] == [0, 1]
+    assert "seed" not in doc["options"] and doc["scenes"][2]["turn"] == 90.0
+    assert set(doc["by_variant"]) == {"0°", "90°"}
+
+    seeded = evaluate_dataset(root, seeds=[3, 4], detect_options={"votes": 1})
+    assert [s.name for s in seeded.scenes[:2]] == ["scene0000_00@seed3", "scene0000_00@seed4"]
+    assert list(seeded.by_variant) == ["seed 3", "seed 4"]
+    assert evaluate_dataset(root, detect_options={"votes": 1}).by_variant == {}
+
+
+@pytest.mark.parametrize(
+    "kwargs, name",
+    [
+        ({"turns": []}, "turns"),
+        ({"turns": [0, 0]}, "turns"),
+        ({"turns": [float("nan")]}, "turns"),
+        ({"turns": ["90"]}, "turns"),
+        ({"seeds": [-1]}, "seeds"),
+        ({"seeds": [1.5]}, "seeds"),
+        ({"seeds": [True]}, "seeds"),
+    ],
+)
+def test_bad_turns_and_seeds_name_the_parameter(tmp_path, kwargs, name):
+    root = make_votenet(tmp_path / "dev", ("scene0000_00",))
+    with pytest.raises(InvalidParameterError, match=f"'{name}' parameter"):
+        evaluate_dataset(root, **kwargs)
+
+
+def test_stored_detections_cannot_be_turned(dataset):
+    root, dets = dataset
+    with pytest.raises(InvalidParameterError, match=r"'turns' parameter.*stored detections"):
+        evaluate_dataset(root, detections_dir=dets, turns=[90])
+    with pytest.raises(InvalidParameterError, match="'seeds' parameter"):
+        evaluate_dataset(root, detections_dir=dets, seeds=[0, 1])
+    with pytest.raises(InvalidParameterError, match="'turn' parameter"):
+        evaluate_scene(discover_scenes(root)[0], detections_dir=dets, turn=90.0)

@@ -7,6 +7,7 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
+from ..errors import InvalidParameterError
 from ..evaluation import evaluate_dataset, write_report
 from ..evaluation._dataset import DATASET_FORMATS
 from ..evaluation._report import CRITERION_NAMES
@@ -54,6 +55,17 @@ def detect_options(
 
 def _pct(x: float) -> str:
     return f"{100 * x:.1f}"
+
+
+def _number_list(text: str | None, kind: type, option: str) -> list | None:
+    """``"0,90,180"`` -> ``[0.0, 90.0, 180.0]`` (None when the option was not given)."""
+    if text is None:
+        return None
+    try:
+        return [kind(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        what = "integers" if kind is int else "numbers"
+        raise InvalidParameterError(option, f"a comma-separated list of {what}", text) from None
 
 
 @app.command("eval")
@@ -118,6 +130,15 @@ def eval_(
         "(detect.votes, default 3)."
     ),
     seed: int = typer.Option(0, "--seed", help="Seed of every random step."),
+    turns: str | None = typer.Option(
+        None, "--turns", metavar="DEG,DEG,...",
+        help="Detect every scene once per turn about the vertical (e.g. 0,90,180,270) and "
+        "report each turn and the pooled figure.",
+    ),
+    seeds: str | None = typer.Option(
+        None, "--seeds", metavar="N,N,...",
+        help="Detect every scene (and turn) once per seed (e.g. 0,1,2), instead of --seed.",
+    ),
 ) -> None:
     """Evaluate detection on a labelled dataset: P, R, F1, AP per class, confusion, times."""
     opts = detect_options(
@@ -136,6 +157,8 @@ def eval_(
         seed,
         votes,
     )
+    turn_list = _number_list(turns, float, "--turns")
+    seed_list = _number_list(seeds, int, "--seeds")
     if save_detections and out is None:
         raise typer.BadParameter("needs --out REPORT_DIR", param_hint="--save-detections")
     save_dir = out / "detections" if (save_detections and out is not None) else None
@@ -148,6 +171,8 @@ def eval_(
             detections_dir=detections,
             save_detections=save_dir,
             on_error="skip" if skip_failed else "raise",
+            turns=turn_list,
+            seeds=seed_list,
         )
         files = write_report(result, out) if out is not None else None
     if state.quiet:
@@ -171,6 +196,14 @@ def eval_(
             ap,
         )
     console.print(table)
+    for run, rev in result.by_variant.items():
+        console.print(
+            f"{run}: "
+            + ", ".join(
+                f"{c} P {_pct(m.precision)} R {_pct(m.recall)} ({m.tp}/{m.num_pred}/{m.num_gt})"
+                for c, m in ((c, rev.per_class[c]) for c in rev.classes)
+            )
+        )
     for key in ("iou@0.5", "distance"):
         m = result.evaluations[key].overall
         console.print(

@@ -50,6 +50,8 @@ from ._dataset import (
     read_scene_detections,
     scene_group,
     summarize_outcomes,
+    turn_cloud,
+    variant_name,
 )
 from ._match import (
     DISTANCE_THRESHOLDS,
@@ -118,7 +120,9 @@ __all__ = [
     "select_groups",
     "split_scenes",
     "summarize_outcomes",
+    "turn_cloud",
     "validation_rooms",
+    "variant_name",
     "write_report",
 ]
 

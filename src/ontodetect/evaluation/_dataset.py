@@ -20,7 +20,9 @@ the same way (DESIGN.md, "Scale").
 
 from __future__ import annotations
 
+import dataclasses
 import functools
+import math
 import os
 import re
 import time
@@ -34,6 +36,7 @@ import numpy as np
 
 from .._parallel import cpu_count, pool_context
 from .._progress import progress
+from .._transforms import yaw_pose
 from ..cloud import PointCloud
 from ..errors import (
     CorruptFileError,
@@ -62,6 +65,8 @@ __all__ = [
     "read_scene_detections",
     "scene_group",
     "summarize_outcomes",
+    "turn_cloud",
+    "variant_name",
 ]
 
 #: Dataset layouts :func:`discover_scenes` knows ("auto" guesses per folder).
@@ -309,7 +314,28 @@ def read_scene_cloud(source: SceneSource) -> PointCloud:
     return cloud
 
 
-def load_scene(source: SceneSource, class_ids: Mapping[int, str] | None = None) -> LoadedScene:
+def turn_cloud(cloud: PointCloud, degrees: float) -> PointCloud:
+    """``cloud`` turned by ``degrees`` about the vertical (z) axis through the origin.
+
+    Points keep their rows (and labels): a turned scan is the same room, met by other
+    voxel boundaries.
+
+    Examples
+    --------
+    >>> from ontodetect import point_cloud
+    >>> turn_cloud(point_cloud([[1.0, 0.0, 0.5]]), 90).xyz.round(6).tolist()
+    [[0.0, 1.0, 0.5]]
+    """
+    if not degrees:
+        return cloud
+    rot = yaw_pose(0.0, 0.0, math.radians(degrees))[:3, :3]
+    normals = None if cloud.normals is None else cloud.normals @ rot.T
+    return cloud.replace(xyz=cloud.xyz @ rot.T, normals=normals)
+
+
+def load_scene(
+    source: SceneSource, class_ids: Mapping[int, str] | None = None, *, turn: float = 0.0
+) -> LoadedScene:
     """Read a scene and its ground-truth instances.
 
     Parameters
@@ -319,13 +345,16 @@ def load_scene(source: SceneSource, class_ids: Mapping[int, str] | None = None) 
     class_ids : mapping of int to str, optional
         Which class ids are evaluated and under which name; :func:`evaluation_classes`
         of the built-in ontology by default.
+    turn : float
+        Turn the scan by this many degrees about the vertical first (:func:`turn_cloud`);
+        the instances' centres are those of the turned points.
 
     Returns
     -------
     LoadedScene
         Instances index the rows of the input file, like detections do.
     """
-    cloud = read_scene_cloud(source)
+    cloud = turn_cloud(read_scene_cloud(source), turn)
     class_ids = evaluation_classes() if class_ids is None else class_ids
     gts = instances_from_labels(
         cloud.fields["instance"],
@@ -386,6 +415,10 @@ class SceneOutcome:
         Seconds per pipeline stage.
     error : str or None
         Why the scene failed; the other fields are then empty.
+    turn : float or None
+        Degrees the scan was turned by (see :func:`evaluate_dataset`'s ``turns``).
+    seed : int or None
+        The seed of this run (see :func:`evaluate_dataset`'s ``seeds``).
     """
 
     name: str
@@ -397,6 +430,8 @@ class SceneOutcome:
     load_seconds: float = 0.0
     timings: dict[str, float] = field(default_factory=dict)
     error: str | None = None
+    turn: float | None = None
+    seed: int | None = None
 
     @property
     def ok(self) -> bool:
@@ -422,6 +457,10 @@ class SceneOutcome:
             "ground_truth": len(self.gts),
             "timings": {k: round(v, 4) for k, v in self.timings.items()},
         }
+        if self.turn is not None:
+            out["turn"] = self.turn
+        if self.seed is not None:
+            out["seed"] = self.seed
         if self.error is not None:
             out["error"] = self.error
         return out
@@ -453,6 +492,8 @@ def evaluate_scene(
     detections_dir: str | os.PathLike[str] | None = None,
     save_dir: str | os.PathLike[str] | None = None,
     class_ids: Mapping[int, str] | None = None,
+    turn: float = 0.0,
+    name: str | None = None,
 ) -> SceneOutcome:
     """Evaluate one scene: read it, detect (or read stored detections), keep both sides.
 
@@ -472,13 +513,24 @@ def evaluate_scene(
         Write this scene's ``detections.json`` to ``<save_dir>/<scene>/``.
     class_ids : mapping of int to str, optional
         Evaluated classes (default: :func:`evaluation_classes` of the ontology used).
+    turn : float
+        Detect in the scan turned by this many degrees about the vertical
+        (:func:`turn_cloud`); not with ``detections_dir`` (stored detections were made
+        on the scan as it is).
+    name : str, optional
+        Name of the outcome and of its folder under ``save_dir`` (default: the scene's).
     """
     opts = _check_detect_options(detect_options)
+    if turn and detections_dir is not None:
+        raise InvalidParameterError(
+            "turn", "0 when scoring stored detections (they were made on the scan as it is)", turn
+        )
+    name = source.name if name is None else name
     if class_ids is None:
         class_ids = evaluation_classes(opts.get("ontology"))
     t0 = time.perf_counter()
     try:
-        scene = load_scene(source, class_ids)
+        scene = load_scene(source, class_ids, turn=turn)
         if detections_dir is not None:
             preds = read_scene_detections(detections_dir, source.name, scene.num_points)
             load = time.perf_counter() - t0
@@ -496,11 +548,11 @@ def evaluate_scene(
                 for d in result.detections
             ]
             if save_dir is not None:
-                _save_detections(result, Path(save_dir) / source.name)
+                _save_detections(result, Path(save_dir) / name)
     except OntoDetectError as exc:
-        return SceneOutcome(source.name, source, error=str(exc))
+        return SceneOutcome(name, source, error=str(exc))
     return SceneOutcome(
-        source.name,
+        name,
         source,
         tuple(preds),
         tuple(scene.gts),
@@ -509,6 +561,50 @@ def evaluate_scene(
         load,
         timings,
     )
+
+
+def variant_name(scene: str, turn: float | None = None, seed: int | None = None) -> str:
+    """Name of one run of a scene turned by ``turn`` degrees with ``seed``.
+
+    Examples
+    --------
+    >>> variant_name("scene0000_00", 90.0, 1), variant_name("office_2", None, 0)
+    ('scene0000_00@90deg-seed1', 'office_2@seed0')
+    """
+    parts = ([] if turn is None else [f"{turn:g}deg"]) + ([] if seed is None else [f"seed{seed}"])
+    return f"{scene}@{'-'.join(parts)}" if parts else scene
+
+
+def _evaluate_variant(
+    unit: tuple[SceneSource, float | None, int | None],
+    detect_options: Mapping[str, Any],
+    **kwargs: Any,
+) -> SceneOutcome:
+    """:func:`evaluate_scene` of one scene turned and seeded (a unit of work)."""
+    source, turn, seed = unit
+    opts = dict(detect_options) if seed is None else {**detect_options, "seed": seed}
+    outcome = evaluate_scene(source, opts, turn=turn or 0.0,
+                             name=variant_name(source.name, turn, seed), **kwargs)
+    return dataclasses.replace(outcome, turn=turn, seed=seed)
+
+
+def _check_variants(name: str, values: Sequence[Any] | None, kind: type) -> list[Any]:
+    """The turns or seeds asked for: distinct finite numbers (seeds non-negative integers)."""
+    if values is None:
+        return []
+    items = list(values)
+    ok = bool(items) and len(set(items)) == len(items)
+    for v in items:
+        if kind is int:
+            ok &= isinstance(v, (int, np.integer)) and not isinstance(v, bool) and v >= 0
+        else:
+            ok &= (isinstance(v, (int, float, np.integer, np.floating))
+                   and not isinstance(v, bool) and math.isfinite(float(v)))
+    if not ok:
+        what = ("distinct non-negative integers" if kind is int
+                else "distinct finite angles in degrees")
+        raise InvalidParameterError(name, f"a non-empty list of {what}", values)
+    return [kind(v) for v in items]
 
 
 def _save_detections(result: Any, folder: Path) -> None:
@@ -583,6 +679,11 @@ class DatasetEvaluation:
         Worker processes used.
     seconds : float
         Wall time of the whole evaluation.
+    by_variant : dict of str to Evaluation
+        When scans were turned or run with several seeds (:func:`evaluate_dataset`'s
+        ``turns`` and ``seeds``): the evaluation at point IoU >= 0.25 of each turn
+        (``"90°"``, over the seeds), or of each seed (``"seed 1"``) when none was turned;
+        ``evaluations`` pools them all. Empty otherwise.
     """
 
     dataset: str
@@ -593,6 +694,7 @@ class DatasetEvaluation:
     options: dict[str, Any] = field(default_factory=dict)
     jobs: int = 1
     seconds: float = 0.0
+    by_variant: dict[str, Evaluation] = field(default_factory=dict)
 
     @property
     def primary(self) -> Evaluation:
@@ -623,6 +725,11 @@ class DatasetEvaluation:
             "evaluations": {k: e.to_dict() for k, e in self.evaluations.items()},
             "scenes": [s.to_dict() for s in self.scenes],
             "failed": [s.to_dict() for s in self.failed],
+            "by_variant": {
+                k: {"per_class": {c: m.to_dict() for c, m in e.per_class.items()},
+                    "overall": e.overall.to_dict()}
+                for k, e in self.by_variant.items()
+            },
         }
 
 
@@ -642,6 +749,17 @@ def summarize_outcomes(
         key: evaluate_scenes(results, classes, criterion=crit, iou_threshold=thr)
         for key, (crit, thr) in CRITERIA.items()
     }
+    groups: dict[str, list[SceneResult]] = {}
+    turned = any(o.turn is not None for o in ok)
+    for o, r in zip(ok, results):
+        if o.turn is not None or o.seed is not None:
+            key = f"{o.turn:g}°" if turned else f"seed {o.seed}"
+            groups.setdefault(key, []).append(r)
+    crit, thr = CRITERIA[PRIMARY]
+    by_variant = {
+        key: evaluate_scenes(rs, classes, criterion=crit, iou_threshold=thr)
+        for key, rs in groups.items()
+    }
     return DatasetEvaluation(
         str(dataset),
         list(classes),
@@ -651,6 +769,7 @@ def summarize_outcomes(
         dict(options or {}),
         jobs,
         seconds,
+        by_variant,
     )
 
 
@@ -701,6 +820,8 @@ def evaluate_dataset(
     save_detections: str | os.PathLike[str] | None = None,
     on_error: str = "raise",
     scenes: Sequence[SceneSource] | None = None,
+    turns: Sequence[float] | None = None,
+    seeds: Sequence[int] | None = None,
 ) -> DatasetEvaluation:
     """Detect in every scene of a dataset and score against its ground truth.
 
@@ -723,6 +844,16 @@ def evaluate_dataset(
         left out and listed in :attr:`DatasetEvaluation.failed`.
     scenes : sequence of SceneSource, optional
         Evaluate these instead of discovering ``path``'s scenes.
+    turns : sequence of float, optional
+        Detect in every scene once per turn, the scan turned by that many degrees about
+        the vertical (the same room met by other voxel boundaries; the ground truth
+        follows by point). On a small dataset one pass is one draw: the pooled figure
+        over turns is the steadier one.
+    seeds : sequence of int, optional
+        Detect in every scene (and turn) once per seed, overriding ``seed`` of
+        ``detect_options``. With ``turns`` or ``seeds`` each run is an outcome of its
+        own, named ``<scene>@<turn>deg-seed<seed>`` (:func:`variant_name`), and
+        :attr:`DatasetEvaluation.by_variant` holds the figures per turn (or seed).
 
     Returns
     -------
@@ -739,16 +870,30 @@ def evaluate_dataset(
     if on_error not in ("raise", "skip"):
         raise InvalidParameterError("on_error", "'raise' or 'skip'", on_error)
     opts = _check_detect_options(detect_options)
+    turn_list = _check_variants("turns", turns, float)
+    seed_list = _check_variants("seeds", seeds, int)
+    if (turn_list or seed_list) and detections_dir is not None:
+        raise InvalidParameterError(
+            "turns" if turn_list else "seeds",
+            "none when scoring stored detections (they were made once, on the scans as they are)",
+            turn_list or seed_list,
+        )
     start = time.perf_counter()
-    units = list(scenes) if scenes is not None else discover_scenes(path, format)
+    sources = list(scenes) if scenes is not None else discover_scenes(path, format)
     ontology = opts.get("ontology")
     class_ids = evaluation_classes(ontology)
     classes = list(dict.fromkeys(class_ids.values()))
     # Scenes in parallel already use the CPUs: the passes of a vote stay in each worker.
     workers = _check_jobs(jobs)
+    units: list[Any]
+    if turn_list or seed_list:
+        units = [(s, t, seed) for s in sources for t in (turn_list or [None])
+                 for seed in (seed_list or [None])]
+    else:
+        units = sources
     per_scene = {"jobs": 1, **opts} if workers > 1 and len(units) > 1 else opts
     work = functools.partial(
-        evaluate_scene,
+        _evaluate_variant if (turn_list or seed_list) else evaluate_scene,
         detect_options=per_scene,
         detections_dir=detections_dir,
         save_dir=save_detections,
@@ -759,11 +904,17 @@ def evaluate_dataset(
         for o in outcomes:
             if not o.ok:
                 raise SceneError(o.name, o.error or "failed")
+    options = describe_options(opts, detections_dir)
+    if turn_list:
+        options["turns"] = turn_list
+    if seed_list:
+        options.pop("seed", None)
+        options["seeds"] = seed_list
     return summarize_outcomes(
         outcomes,
         classes,
         dataset=str(path),
-        options=describe_options(opts, detections_dir),
+        options=options,
         jobs=workers,
         seconds=time.perf_counter() - start,
     )
