@@ -364,3 +364,5 @@ def test_stored_detections_cannot_be_turned(dataset):
         evaluate_dataset(root, detections_dir=dets, seeds=[0, 1])
     with pytest.raises(InvalidParameterError, match="'turn' parameter"):
         evaluate_scene(discover_scenes(root)[0], detections_dir=dets, turn=90.0)
+    with pytest.raises(InvalidParameterError, match="'turn' parameter"):
+        evaluate_scene(discover_scenes(root)[0], turn=float("inf"))

@@ -521,6 +521,8 @@ def evaluate_scene(
         Name of the outcome and of its folder under ``save_dir`` (default: the scene's).
     """
     opts = _check_detect_options(detect_options)
+    if isinstance(turn, bool) or not isinstance(turn, (int, float)) or not math.isfinite(turn):
+        raise InvalidParameterError("turn", "a finite angle in degrees", turn)
     if turn and detections_dir is not None:
         raise InvalidParameterError(
             "turn", "0 when scoring stored detections (they were made on the scan as it is)", turn
