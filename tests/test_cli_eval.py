@@ -50,7 +50,7 @@ def test_eval_turns_each_scene_and_reports_every_turn_and_the_pool(dataset, tmp_
     out = tmp_path / "turned"
     assert main(["eval", str(dataset), "-o", str(out), "--turns", "0,90", "--votes", "1"]) == 0
     printed = capsys.readouterr().out
-    assert "4 scenes" in printed and "90°: chair P" in printed
+    assert "2 scenes, 4 runs" in printed and "90°: chair P" in printed
     doc = json.loads((out / "report.json").read_text(encoding="utf-8"))
     assert [s["scene"] for s in doc["scenes"]] == [
         "scene_0000@0deg", "scene_0000@90deg", "scene_0001@0deg", "scene_0001@90deg"

@@ -178,9 +178,10 @@ def eval_(
     if state.quiet:
         return
     ev = result.primary
-    table = Table(
-        title=f"{dataset.name}: {len(result.scenes)} scenes, {CRITERION_NAMES['iou@0.25']}"
-    )
+    runs = f"{len(result.scenes)} scenes"
+    if result.by_variant:
+        runs = f"{len({s.source.name for s in result.scenes})} scenes, {len(result.scenes)} runs"
+    table = Table(title=f"{dataset.name}: {runs}, {CRITERION_NAMES['iou@0.25']}")
     for col in ("class", "GT", "det", "TP", "P %", "R %", "F1 %", "AP %"):
         table.add_column(col, justify="left" if col == "class" else "right")
     for m in [*(ev.per_class[c] for c in ev.classes), ev.overall]:
