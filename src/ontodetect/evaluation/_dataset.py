@@ -582,7 +582,8 @@ def _evaluate_variant(
     detect_options: Mapping[str, Any],
     **kwargs: Any,
 ) -> SceneOutcome:
-    """:func:`evaluate_scene` of one scene turned and seeded (a unit of work)."""
+    """:func:`evaluate_scene` of one scene turned and seeded (a unit of work); with
+    neither, the scene as it is under its own name."""
     source, turn, seed = unit
     opts = dict(detect_options) if seed is None else {**detect_options, "seed": seed}
     outcome = evaluate_scene(source, opts, turn=turn or 0.0,
@@ -887,15 +888,12 @@ def evaluate_dataset(
     classes = list(dict.fromkeys(class_ids.values()))
     # Scenes in parallel already use the CPUs: the passes of a vote stay in each worker.
     workers = _check_jobs(jobs)
-    units: list[Any]
-    if turn_list or seed_list:
-        units = [(s, t, seed) for s in sources for t in (turn_list or [None])
-                 for seed in (seed_list or [None])]
-    else:
-        units = sources
+    # A plain run is the one variant (None, None): the scene as it is, with ``seed``.
+    units = [(s, t, seed) for s in sources for t in (turn_list or [None])
+             for seed in (seed_list or [None])]
     per_scene = {"jobs": 1, **opts} if workers > 1 and len(units) > 1 else opts
     work = functools.partial(
-        _evaluate_variant if (turn_list or seed_list) else evaluate_scene,
+        _evaluate_variant,
         detect_options=per_scene,
         detections_dir=detections_dir,
         save_dir=save_detections,
