@@ -461,7 +461,8 @@ def _frame_pose(
 
     Cameras stand near the four corners and the middles of the four walls
     (jittered by ``rng``), looking at the furniture; a coarse probe render keeps
-    the one that sees the most pieces of furniture, then the most furniture pixels.
+    the one that sees the most pieces of furniture, then the most furniture pixels,
+    among those whose projector (``cam.baseline`` to the right) the camera can see.
     """
     room = np.asarray(scene.size[:2], np.float64)
     lo = np.minimum(WALL_CLEARANCE, room / 4)
@@ -501,6 +502,12 @@ def _frame_pose(
     pixels = np.bincount(frame, minlength=len(poses))
     pair, count = np.unique(frame * len(furniture) + inst[mine], return_counts=True)
     seen = np.bincount(pair[count >= VIEW_MIN_PIXELS] // len(furniture), minlength=len(poses))
+    if cam.baseline > 0:
+        # A structured-light camera measures only what its projector lights: with the
+        # projector on the far side of a door leaf beside the camera, the frame is empty.
+        reach, _ = caster.cast(poses[:, :3, 3], poses[:, :3, 0] * cam.baseline)
+        blocked = reach <= 1.0
+        seen[blocked], pixels[blocked] = -1, -1
     best = np.lexsort((pixels, seen))[-1]
     return poses[best : best + 1]
 
