@@ -19,6 +19,7 @@ from ontodetect.evaluation import (
     evaluation_classes,
     load_scene,
     map_scenes,
+    markdown_report,
     read_scene_detections,
     scene_group,
 )
@@ -331,6 +332,16 @@ def test_runs_per_turn_and_seed_are_named_pooled_and_reported_per_turn(tmp_path)
     assert doc["options"]["turns"] == [0.0, 90.0] and doc["options"]["seeds"] == [0, 1]
     assert "seed" not in doc["options"] and doc["scenes"][2]["turn"] == 90.0
     assert set(doc["by_variant"]) == {"0°", "90°"}
+    # the report sums the four runs of a scene in one row; report.json keeps every run
+    rows = markdown_report(ev).split("## Per scene")[1].split("\n## ")[0]
+    scene_rows = [line for line in rows.splitlines() if line.startswith("| scene0")]
+    assert [line.split(" | ")[:2] for line in scene_rows] == [
+        ["| scene0000_00", "4"], ["| scene0001_00", "4"],
+    ]
+    # one chair and one table per run: 4 of each over the runs of a scene
+    assert all(line.split(" | ")[4] == "4/0/0" and line.endswith("| 4/0/0 |")
+               for line in scene_rows)
+    assert len(doc["scenes"]) == 8
 
     seeded = evaluate_dataset(root, seeds=[3, 4], detect_options={"votes": 1})
     assert [s.name for s in seeded.scenes[:2]] == ["scene0000_00@seed3", "scene0000_00@seed4"]

@@ -176,18 +176,32 @@ def _confusion_table(ev: Evaluation) -> list[str]:
 
 
 def _scene_table(evaluation: DatasetEvaluation) -> list[str]:
+    """One row per scene; the runs of a turned or reseeded scene are summed in one row
+    (report.json keeps every run)."""
     classes = evaluation.classes
-    header = ["scene", "points", "seconds", *(f"{c} (gt/det/TP)" for c in classes)]
-    rows = []
     per_scene = {r["scene"]: r for r in evaluation.primary.per_scene}
+    rows: dict[str, dict[str, Any]] = {}
     for s in evaluation.scenes:
+        row = rows.setdefault(s.source.name, {"runs": 0, "points": s.num_points,
+                                              "seconds": 0.0, "counts": {}})
+        row["runs"] += 1
+        row["seconds"] += s.seconds
         r = per_scene.get(s.name, {})
-        cells = []
         for c in classes:
             v = r.get(c, {"gt": 0, "pred": 0, "tp": 0})
-            cells.append(f"{v['gt']}/{v['pred']}/{v['tp']}")
-        rows.append([s.name, f"{s.num_points:,}", f"{s.seconds:.2f}", *cells])
-    return _table(header, rows, "lrr" + "r" * len(classes))
+            total = row["counts"].setdefault(c, [0, 0, 0])
+            for i, key in enumerate(("gt", "pred", "tp")):
+                total[i] += v[key]
+    runs = bool(evaluation.by_variant)
+    header = ["scene", *(["runs"] if runs else []), "points",
+              "seconds per run" if runs else "seconds", *(f"{c} (gt/det/TP)" for c in classes)]
+    table = [
+        [name, *([str(row["runs"])] if runs else []), f"{row['points']:,}",
+         f"{row['seconds'] / row['runs']:.2f}",
+         *("/".join(str(n) for n in row["counts"][c]) for c in classes)]
+        for name, row in rows.items()
+    ]
+    return _table(header, table, "l" + ("r" if runs else "") + "rr" + "r" * len(classes))
 
 
 def _options_line(options: dict[str, Any]) -> str:
@@ -323,6 +337,8 @@ def markdown_report(evaluation: DatasetEvaluation) -> str:
         "",
         "## Per scene (point IoU ≥ 0.25)",
         "",
+        *(["Summed over the runs of each scene; report.json lists every run.", ""]
+          if evaluation.by_variant else []),
         *_scene_table(evaluation),
         "",
     ]
