@@ -77,6 +77,8 @@ def test_detect_explain_prints_constraints(scene, tmp_path, capsys):
     (["--set", "cluster.radius=-1"], "cluster.radius"),
     (["--threshold", "2"], "'threshold'"),
     (["--votes", "0"], "'detect.votes'"),
+    (["--viewpoint", "1,2"], "'--viewpoint'"),
+    (["--viewpoint", "1,up,2"], "'--viewpoint'"),
 ])
 def test_detect_bad_parameters_exit_2_with_one_line(scene, tmp_path, capsys, args, message):
     code = main(["detect", str(scene / "cloud.ply"), "-o", str(tmp_path / "o"), *args])

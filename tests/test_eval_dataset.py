@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from ontodetect import InvalidParameterError, ReadError, point_cloud, write_cloud
+from ontodetect.cloud import sensor_position
 from ontodetect.evaluation import (
     NYU40_CLASSES,
     SceneError,
@@ -23,6 +24,7 @@ from ontodetect.evaluation import (
     read_scene_detections,
     scene_group,
 )
+from ontodetect.evaluation._dataset import turn_cloud
 from ontodetect.io._detections import write_detections
 from ontodetect.ontology import parse_ontology
 
@@ -313,6 +315,13 @@ def test_a_turned_scene_keeps_its_ground_truth_by_row_with_turned_centres(tmp_pa
     chair = next(g for g in turned.gts if g.label == "chair")
     assert np.allclose(chair.center, [0.0, 4.5, 0.5], atol=1e-5)
     assert np.allclose(turned.cloud.xyz[:, 1], plain.cloud.xyz[:, 0], atol=1e-5)
+
+
+def test_a_turned_single_view_turns_its_sensor_too():
+    frame = point_cloud([[2.0, 0.0, 0.5]]).with_meta(sensor_position=[1.0, 0.0, 1.5])
+    turned = turn_cloud(frame, 90.0)
+    assert np.allclose(turned.xyz, [[0.0, 2.0, 0.5]])
+    assert np.allclose(sensor_position(turned), [0.0, 1.0, 1.5])
 
 
 @pytest.mark.filterwarnings("ignore:no floor found")  # a line of points: nothing to find

@@ -9,6 +9,7 @@ import pytest
 import trimesh
 
 from ontodetect import read_cloud
+from ontodetect.cloud import pixel_grid, sensor_position
 from ontodetect.errors import CorruptFileError, InvalidParameterError, ReadError
 from ontodetect.synth import (
     SYNTH_FORMAT,
@@ -172,6 +173,12 @@ def test_single_frame_writes_an_organized_pcd(tmp_path):
     pose = np.asarray(scene["trajectory"][0])
     assert np.allclose(cloud.xyz, frame.xyz @ pose[:3, :3].T + pose[:3, 3], atol=1e-4)
     assert "frame.pcd" in scene["files"]
+    # read back, the world-frame frame knows where its camera stood and its pixel grid
+    assert np.allclose(sensor_position(cloud), pose[:3, 3])
+    assert np.allclose(sensor_position(frame), 0.0)  # the camera frame's origin
+    pixels, width, height = pixel_grid(cloud)
+    assert (width, height) == (meta["width"], meta["height"])
+    assert np.array_equal(pixels, frame.index)
 
 
 def test_single_frame_view_keeps_the_projector_in_sight():

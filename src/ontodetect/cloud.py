@@ -20,7 +20,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .errors import InvalidParameterError
 
-__all__ = ["DataWarning", "PointCloud", "point_cloud"]
+__all__ = ["DataWarning", "PointCloud", "pixel_grid", "point_cloud", "sensor_position"]
 
 #: Names that are not allowed as extra fields because the cloud stores them itself.
 RESERVED_FIELDS = frozenset(
@@ -376,3 +376,69 @@ def point_cloud(
         index=None if idx is None else _frozen(idx),
         meta=MappingProxyType(dict(meta or {})),
     )
+
+
+# -- single views --------------------------------------------------------------------------
+def sensor_position(cloud: PointCloud) -> NDArray[np.float64] | None:
+    """(3,) position of the sensor in the cloud's frame when the cloud is one view.
+
+    ``cloud.meta["sensor_position"]`` when set (``ontodetect detect --viewpoint``, a
+    simulated frame read by :func:`ontodetect.synth.load_synth`), else the translation
+    of an organized cloud's ``viewpoint`` (a PCD camera frame: its ``VIEWPOINT``, the
+    origin by default); None for anything else, such as a scan fused from many views,
+    where no one position saw every point.
+
+    Examples
+    --------
+    >>> frame = point_cloud([[0.0, 0.0, 1.0]]).with_meta(
+    ...     organized=True, viewpoint=[0.1, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0])
+    >>> sensor_position(frame).tolist(), sensor_position(point_cloud([[0.0, 0.0, 1.0]]))
+    ([0.1, 0.0, 0.0], None)
+    """
+    meta = cloud.meta
+    position = meta.get("sensor_position")
+    if position is None and meta.get("organized") and meta.get("viewpoint") is not None:
+        position = list(meta["viewpoint"])[:3]
+    return None if position is None else as_position(position)
+
+
+def as_position(value: Any, name: str = "viewpoint") -> NDArray[np.float64]:
+    """``value`` as a (3,) float position, or :class:`InvalidParameterError` naming ``name``."""
+    try:
+        out = np.asarray(value, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError):
+        out = np.zeros(0)
+    if out.shape != (3,) or not np.all(np.isfinite(out)):
+        raise InvalidParameterError(name, "three finite numbers (x, y, z)", value)
+    return out
+
+
+def pixel_grid(cloud: PointCloud) -> tuple[NDArray[np.int64], int, int] | None:
+    """Pixel of every point and the image size, when the cloud is an organized frame.
+
+    The pixel is row-major in a ``meta["width"]`` × ``meta["height"]`` grid: the
+    ``pixel`` field when there is one (a simulated frame in the world frame), else the
+    point's row when ``meta["organized"]`` (a PCD frame, whose missing pixels were
+    dropped). None when the cloud is not a frame.
+
+    Examples
+    --------
+    >>> frame = point_cloud([[0.0, 0.0, 1.0], [0.0, 0.1, 1.0]], index=[1, 5]).with_meta(
+    ...     organized=True, width=4, height=2)
+    >>> pixels, width, height = pixel_grid(frame)
+    >>> pixels.tolist(), width, height
+    ([1, 5], 4, 2)
+    """
+    meta = cloud.meta
+    width, height = meta.get("width"), meta.get("height")
+    if not isinstance(width, (int, np.integer)) or not isinstance(height, (int, np.integer)):
+        return None
+    if "pixel" in cloud.fields:
+        pixels = np.asarray(cloud.fields["pixel"], dtype=np.int64)
+    elif meta.get("organized"):
+        pixels = np.asarray(cloud.index, dtype=np.int64)
+    else:
+        return None
+    if int(height) < 2 or not len(pixels) or pixels.min() < 0 or pixels.max() >= width * height:
+        return None
+    return pixels, int(width), int(height)

@@ -331,6 +331,12 @@ class PrepareConfig(_Section):
     smoothing: bool = _param(
         False, Boolean(), "Project voxel centres on local planes (less scatter on planes)."
     )
+    depth_smoothing: bool = _param(
+        True,
+        Boolean(),
+        "Single camera frames: bilateral filter of inverse depth over the pixel grid "
+        "(depth steps).",
+    )
     # Table 4.1: altitude cut-off 140 cm; no seat or table is higher.
     altitude_cutoff: float = _param(
         1.4, POSITIVE, "Objects are searched below this height (m) above floor."

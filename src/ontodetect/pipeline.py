@@ -14,6 +14,7 @@ import math
 import multiprocessing
 import threading
 import time
+import warnings
 from collections.abc import Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
@@ -24,7 +25,7 @@ from numpy.typing import NDArray
 
 from ._parallel import cpu_count, fork_context
 from ._progress import progress, use_reporter
-from .cloud import PointCloud
+from .cloud import DataWarning, PointCloud, as_position, pixel_grid, sensor_position
 from .config import Config
 from .errors import InvalidParameterError
 from .evaluation._match import Instance, overlap_matrix
@@ -42,8 +43,8 @@ from .render import box_corners
 from .segment import Cluster, Segmentation, segment
 
 __all__ = [
-    "Detection", "Result", "describe_cluster", "describe_clusters", "detect", "majority_labels",
-    "pass_probabilities", "shelter_heights", "vote_turns", "with_cad",
+    "Detection", "Result", "describe_cluster", "describe_clusters", "detect", "hidden_heights",
+    "majority_labels", "pass_probabilities", "shelter_heights", "vote_turns", "with_cad",
 ]
 
 #: Format tag of detections.json.
@@ -198,9 +199,11 @@ def with_cad(result: Result, fits: Sequence[Any]) -> Result:
 
 
 def describe_cluster(cluster: Cluster, shelter: float = -math.inf,
-                     ceiling: float = math.inf) -> ClusterDescription:
+                     ceiling: float = math.inf, hidden_below: float = -math.inf
+                     ) -> ClusterDescription:
     """What the ontology scoring needs to know about a cluster (``shelter``: see
-    :func:`shelter_heights`; ``ceiling``: the top of the search volume)."""
+    :func:`shelter_heights`; ``ceiling``: the top of the search volume;
+    ``hidden_below``: see :func:`hidden_heights`)."""
     return ClusterDescription(
         planes=cluster.planes,
         relations=cluster.relations_by_pair,
@@ -210,14 +213,69 @@ def describe_cluster(cluster: Cluster, shelter: float = -math.inf,
         bottom=cluster.bottom,
         shelter=shelter,
         ceiling=ceiling,
+        hidden_below=hidden_below,
     )
 
 
-def describe_clusters(seg: Segmentation) -> list[ClusterDescription]:
+def describe_clusters(seg: Segmentation, viewpoint: Sequence[float] | None = None
+                      ) -> list[ClusterDescription]:
     """:func:`describe_cluster` for every cluster, with what stands beside it and the
-    altitude cut-off of the search."""
+    altitude cut-off of the search.
+
+    ``viewpoint`` is the sensor's position in the input frame when the scan is one view
+    (:func:`ontodetect.cloud.sensor_position`); then a cluster may also hide what
+    stands behind it (:func:`hidden_heights`).
+    """
     ceiling = float(seg.config.prepare.altitude_cutoff)
-    return [describe_cluster(c, float(h), ceiling) for c, h in zip(seg, shelter_heights(seg))]
+    hidden = np.full(len(seg), -math.inf)
+    if viewpoint is not None and len(seg):
+        eye = seg.prepared.level(np.asarray(viewpoint, dtype=np.float64))[0]
+        hidden = hidden_heights(np.array([c.height for c in seg], dtype=np.float64),
+                                np.array([c.box.center[:2] for c in seg], dtype=np.float64),
+                                eye)
+    return [describe_cluster(c, float(h), ceiling, float(b))
+            for c, h, b in zip(seg, shelter_heights(seg), hidden)]
+
+
+#: What a cluster hides behind it must lie in its shadow for at least this far (m),
+#: about the depth of a seat behind its backrest.
+SELF_SHADOW = 0.3
+#: The sensor must stand at least this far (m, horizontally) from the cluster's centre.
+SELF_SHADOW_DISTANCE = 0.5
+
+
+def hidden_heights(tops: NDArray, centers: NDArray, eye: Sequence[float]) -> NDArray:
+    """(clusters,) height under which each cluster hides what stands behind it.
+
+    Seen over an object's top at height ``top`` from an eye at height ``eye_z`` and
+    horizontal distance ``d``, the sight line comes down to height ``h`` only
+    ``(top − h) · d / (eye_z − top)`` beyond the object. Whatever stands behind it
+    lower than ``top − SELF_SHADOW · (eye_z − top) / d`` is out of sight for at least
+    ``SELF_SHADOW``: that height is returned (the top itself when the eye is not
+    above it), and ``-inf`` when the eye stands closer than ``SELF_SHADOW_DISTANCE``.
+
+    Parameters
+    ----------
+    tops : (k,) float
+        Top of each cluster above the floor (levelled frame).
+    centers : (k, 2) float
+        Horizontal centre of each cluster (levelled frame).
+    eye : (3,) float
+        The sensor's position in the levelled frame.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> tops, centers = np.array([0.9, 0.9, 1.6]), np.array([[2.0, 0], [0.3, 0], [2.0, 0]])
+    >>> hidden_heights(tops, centers, [0.0, 0.0, 1.5]).round(3).tolist()
+    [0.81, -inf, 1.6]
+    """
+    tops = np.asarray(tops, dtype=np.float64)
+    eye = np.asarray(eye, dtype=np.float64)
+    d = np.linalg.norm(np.asarray(centers, dtype=np.float64).reshape(-1, 2) - eye[:2], axis=1)
+    above = np.maximum(eye[2] - tops, 0.0)
+    hidden = tops - SELF_SHADOW * above / np.maximum(d, 1e-9)
+    return np.where(d >= SELF_SHADOW_DISTANCE, hidden, -math.inf)
 
 
 #: Horizontal planes of at least this area (m²) can hide ...
@@ -308,6 +366,7 @@ def detect(
     seed: int = 0,
     up: str | Sequence[float] | None = None,
     scale: float | None = None,
+    viewpoint: Sequence[float] | None = None,
 ) -> Result:
     """Find the objects an ontology describes in a point cloud.
 
@@ -342,6 +401,12 @@ def detect(
         Seed of every random step.
     up, scale :
         Passed to the preparation (up direction, scale factor k_s).
+    viewpoint : (3,) float, optional
+        Where the sensor stood, in the cloud's frame and units, when the cloud is one
+        view (a single camera frame): a part the object itself hides from there, such
+        as a seat behind its backrest, counts as occluded rather than absent. By
+        default :func:`ontodetect.cloud.sensor_position` (an organized cloud's
+        viewpoint); none for a fused scan.
 
     Returns
     -------
@@ -367,11 +432,18 @@ def detect(
         d = config.detect
     if not 0.0 < none_likelihood <= 1.0:
         raise InvalidParameterError("none_likelihood", "a number in (0, 1]", none_likelihood)
+    if viewpoint is not None:
+        cloud = cloud.with_meta(sensor_position=as_position(viewpoint).tolist())
+    viewpoint = sensor_position(cloud)
+    if viewpoint is not None and pixel_grid(cloud) is None:
+        warnings.warn("a viewpoint but no pixel grid: if this is a depth camera's frame, its "
+                      "depth steps stay unsmoothed and read as flat parts (give the organized "
+                      "frame, such as its PCD)", DataWarning, stacklevel=2)
     ontology = ontology or builtin_ontology()
     priors = class_priors(ontology, room, indoor)
     opts = {"ontology": ontology, "priors": priors, "threshold": threshold, "beta": beta,
             "none_likelihood": none_likelihood, "context": context, "seed": seed, "up": up,
-            "scale": scale}
+            "scale": scale, "viewpoint": viewpoint}
     passes = d.votes if len(cloud) <= d.vote_max_points else 1
     turned = [config.replace(prepare={"turn": (config.prepare.turn + t + 180.0) % 360.0 - 180.0})
               for t in vote_turns(passes, d.vote_turn)]
@@ -437,7 +509,7 @@ def _pass_clusters(cloud: PointCloud, config: Config, opts: Mapping[str, Any]
 def _one_pass(cloud: PointCloud, config: Config, *, ontology: Ontology,
               priors: Mapping[str, float], threshold: float, beta: float,
               none_likelihood: float, context: float, seed: int, up: Any, scale: Any,
-              found: bool = True,
+              viewpoint: NDArray[np.float64] | None = None, found: bool = True,
               ) -> tuple[Segmentation, list[ClusterScores], list[LabelChoice], list[Detection],
                          dict[str, float]]:
     """Segment, score and label once; detections (when ``found``) numbered 0, in cluster
@@ -450,7 +522,7 @@ def _one_pass(cloud: PointCloud, config: Config, *, ontology: Ontology,
     t0 = time.perf_counter()
     scores: list[ClusterScores] = []
     with progress("Scoring clusters", total=len(seg)) as advance:
-        for desc in describe_clusters(seg):
+        for desc in describe_clusters(seg, viewpoint):
             scores.append(score_cluster(desc, ontology, priors, none_likelihood=none_likelihood))
             advance(1)
     timings["score"] = time.perf_counter() - t0

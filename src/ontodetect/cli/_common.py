@@ -41,3 +41,14 @@ def room_option(room: str | None, room_probs: Path | None) -> str | dict[str, An
     if not isinstance(data, dict):
         raise ReadError(room_probs, "expected a mapping of room category to probability")
     return data
+
+
+def number_list(text: str | None, kind: type, option: str) -> list | None:
+    """``"0,90,180"`` -> ``[0.0, 90.0, 180.0]`` (None when the option was not given)."""
+    if text is None:
+        return None
+    try:
+        return [kind(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        what = "integers" if kind is int else "numbers"
+        raise InvalidParameterError(option, f"a comma-separated list of {what}", text) from None

@@ -8,11 +8,12 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
+from ..cloud import as_position
 from ..io import read_cloud
 from ..outputs import explain, write_outputs
 from ..pipeline import detect as run_detect
 from . import app
-from ._common import load_config, load_ontology_option, room_option
+from ._common import load_config, load_ontology_option, number_list, room_option
 from ._console import console, reporting, state
 
 
@@ -35,6 +36,11 @@ def detect(
     indoor: float | None = typer.Option(None, "--indoor", help="P(indoor), Eq. 3.5."),
     up: str | None = typer.Option(None, "--up", help="Up axis: z (default), auto, y, -y, ..."),
     scale: float | None = typer.Option(None, "--scale", help="Scale factor k_s to metres."),
+    viewpoint: str | None = typer.Option(
+        None, "--viewpoint", metavar="X,Y,Z",
+        help="Where the sensor stood, in the input's frame and units, when INPUT is one "
+        "camera frame: a part the object itself hides (a seat behind its backrest) counts as "
+        "occluded. Organized PCD frames give it by their VIEWPOINT."),
     threshold: float | None = typer.Option(
         None, "--threshold", help="Decision threshold (detect.threshold; Table 4.1: 0.15)."),
     beta: float | None = typer.Option(
@@ -55,11 +61,14 @@ def detect(
     cfg = load_config(config, set_)
     onto = load_ontology_option(ontology, ontology_only)
     room_arg = room_option(room, room_probs)
+    eye = number_list(viewpoint, float, "--viewpoint")
+    if eye is not None:
+        eye = as_position(eye, "--viewpoint")
     with reporting():
         cloud = read_cloud(path, format=format)
         result = run_detect(cloud, config=cfg, ontology=onto, room=room_arg, indoor=indoor,
                             threshold=threshold, beta=beta, context=context, votes=votes,
-                            seed=seed, up=up, scale=scale)
+                            seed=seed, up=up, scale=scale, viewpoint=eye)
         object_map = None
         if cad:
             from ..cad import fit_detections, write_object_map

@@ -7,12 +7,11 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
-from ..errors import InvalidParameterError
 from ..evaluation import evaluate_dataset, write_report
 from ..evaluation._dataset import DATASET_FORMATS
 from ..evaluation._report import CRITERION_NAMES
 from . import app
-from ._common import load_config, load_ontology_option, room_option
+from ._common import load_config, load_ontology_option, number_list, room_option
 from ._console import console, reporting, state
 
 
@@ -55,17 +54,6 @@ def detect_options(
 
 def _pct(x: float) -> str:
     return f"{100 * x:.1f}"
-
-
-def _number_list(text: str | None, kind: type, option: str) -> list | None:
-    """``"0,90,180"`` -> ``[0.0, 90.0, 180.0]`` (None when the option was not given)."""
-    if text is None:
-        return None
-    try:
-        return [kind(v) for v in text.split(",") if v.strip()]
-    except ValueError:
-        what = "integers" if kind is int else "numbers"
-        raise InvalidParameterError(option, f"a comma-separated list of {what}", text) from None
 
 
 @app.command("eval")
@@ -157,8 +145,8 @@ def eval_(
         seed,
         votes,
     )
-    turn_list = _number_list(turns, float, "--turns")
-    seed_list = _number_list(seeds, int, "--seeds")
+    turn_list = number_list(turns, float, "--turns")
+    seed_list = number_list(seeds, int, "--seeds")
     if save_detections and out is None:
         raise typer.BadParameter("needs --out REPORT_DIR", param_hint="--save-detections")
     save_dir = out / "detections" if (save_detections and out is not None) else None

@@ -37,7 +37,7 @@ import numpy as np
 from .._parallel import cpu_count, pool_context
 from .._progress import progress
 from .._transforms import yaw_pose
-from ..cloud import PointCloud
+from ..cloud import PointCloud, sensor_position
 from ..errors import (
     CorruptFileError,
     InvalidParameterError,
@@ -318,7 +318,7 @@ def turn_cloud(cloud: PointCloud, degrees: float) -> PointCloud:
     """``cloud`` turned by ``degrees`` about the vertical (z) axis through the origin.
 
     Points keep their rows (and labels): a turned scan is the same room, met by other
-    voxel boundaries.
+    voxel boundaries. The sensor of a single view (``meta["sensor_position"]``) turns too.
 
     Examples
     --------
@@ -330,7 +330,9 @@ def turn_cloud(cloud: PointCloud, degrees: float) -> PointCloud:
         return cloud
     rot = yaw_pose(0.0, 0.0, math.radians(degrees))[:3, :3]
     normals = None if cloud.normals is None else cloud.normals @ rot.T
-    return cloud.replace(xyz=cloud.xyz @ rot.T, normals=normals)
+    out = cloud.replace(xyz=cloud.xyz @ rot.T, normals=normals)
+    eye = sensor_position(cloud)  # the sensor of a single view turns with its points
+    return out if eye is None else out.with_meta(sensor_position=(rot @ eye).tolist())
 
 
 def load_scene(

@@ -109,6 +109,10 @@ class ClusterDescription:
     ceiling : float
         Top of the search volume above the floor (the altitude cut-off, m): a
         cluster that reaches it may go on above, so its height is a lower bound.
+    hidden_below : float
+        In a single view, the height above the floor under which the cluster itself
+        hides from the sensor what stands behind it (a seat behind its backrest, seen
+        from behind and above); ``-inf`` when unknown (a scan fused from many views).
     """
 
     planes: Sequence[Any]
@@ -119,6 +123,7 @@ class ClusterDescription:
     bottom: float
     shelter: float = -math.inf
     ceiling: float = math.inf
+    hidden_below: float = -math.inf
 
     @property
     def cut(self) -> bool:
@@ -282,23 +287,30 @@ def _height_span(g: Gaussian) -> tuple[float, float]:
 def missing_factor(part: Part, desc: ClusterDescription) -> float:
     """The factor of ``part`` left without a plane in this cluster.
 
-    ``part.missing``, or ``part.occluded`` when the part can be hidden: the cluster
-    is lifted off the floor (its bottom above ``LIFTED_BOTTOM``), a neighbouring
-    surface stands about as high as its lowest visible point (``desc.shelter``), and
-    the part belongs just below what is visible (the centre of its height range is
-    less than ``HIDDEN_MARGIN`` above the cluster's bottom, and the top of the range
-    is not below it).
+    ``part.missing``, or ``part.occluded`` when the part can be hidden. The cluster
+    must be lifted off the floor (its bottom above ``LIFTED_BOTTOM``), and then
+    either
+
+    - a neighbouring surface stands about as high as its lowest visible point
+      (``desc.shelter``), and the part belongs just below what is visible (the
+      centre of its height range is less than ``HIDDEN_MARGIN`` above the cluster's
+      bottom, and the top of the range is not below it); or
+    - in a single view, the cluster itself hides the height the part belongs at
+      from the sensor (the centre of its height range lies under
+      ``desc.hidden_below`` and not more than ``HIDDEN_MARGIN`` below the cluster's
+      bottom): the seat of a chair seen from behind.
     """
     bottom = float(desc.bottom)
-    if (part.occluded is None or bottom <= LIFTED_BOTTOM
-            or float(desc.shelter) < bottom - SHELTER_TOLERANCE):
+    if part.occluded is None or bottom <= LIFTED_BOTTOM:
         return part.missing
     height = part.constraints.get("height")
-    if height is not None:
-        centre, upper = _height_span(height)
-        if not centre < bottom + HIDDEN_MARGIN or bottom > upper:
-            return part.missing
-    return max(part.missing, part.occluded)
+    span = None if height is None else _height_span(height)
+    if float(desc.shelter) >= bottom - SHELTER_TOLERANCE and (
+            span is None or (span[0] < bottom + HIDDEN_MARGIN and bottom <= span[1])):
+        return max(part.missing, part.occluded)
+    if span is not None and bottom - HIDDEN_MARGIN <= span[0] <= float(desc.hidden_below):
+        return max(part.missing, part.occluded)
+    return part.missing
 
 
 def score_class(cls: ObjectClass, desc: ClusterDescription, log_prior: float = 0.0) -> ClassScore:

@@ -2,6 +2,8 @@
 
 :func:`prepare` runs every step and returns a :class:`PreparedScene`:
 
+0. a single camera frame only: its depth steps smoothed over the pixel grid
+   (:func:`smooth_depth`);
 1. scale recovery ``X_sc = k_s X_c`` (:func:`scale_from_travel`, :func:`guess_scale`);
 2. denoising on the voxel grid (:func:`denoise`, :func:`statistical_outlier_mask`,
    :func:`radius_outlier_mask`, :func:`far_outlier_mask`);
@@ -32,6 +34,7 @@ from ..config import Config
 from ..errors import InvalidParameterError
 from ..summary import estimate_spacing, guess_units
 from ._denoise import denoise, far_outlier_mask, radius_outlier_mask, statistical_outlier_mask
+from ._depth import smooth_depth
 from ._floor import FloorMap, floor_height_map
 from ._gravity import (
     AXES,
@@ -76,6 +79,7 @@ __all__ = [
     "radius_outlier_mask",
     "rotation_between",
     "scale_from_travel",
+    "smooth_depth",
     "smooth_surface",
     "statistical_outlier_mask",
     "surface_spacing",
@@ -395,6 +399,8 @@ def prepare(
     cfg = (config or Config()).prepare
     if not isinstance(cloud, PointCloud):
         cloud = point_cloud(cloud)
+    if cfg.depth_smoothing:
+        cloud = smooth_depth(cloud)  # only a single organized frame with its sensor changes
     xyz = cloud.xyz
     n = len(xyz)
     if n == 0:

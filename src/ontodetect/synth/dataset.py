@@ -695,7 +695,9 @@ def load_synth(out_dir: str | Path) -> tuple[PointCloud, list[dict[str, Any]], d
     -------
     cloud : PointCloud
         cloud.ply, with fields ``instance`` and ``class_id`` (and ``intensity``,
-        ``pixel`` when written).
+        ``pixel`` when written); a single frame (``rgbd-frame``) carries the camera's
+        position as ``meta["sensor_position"]`` and its image size as ``meta["width"]``
+        and ``meta["height"]`` (see :func:`ontodetect.cloud.pixel_grid`).
     objects : list of dict
         objects.json's ``objects``: id, class, class_id, kind, structure, box,
         pose, dimensions, parts, num_points, seen.
@@ -729,4 +731,19 @@ def load_synth(out_dir: str | Path) -> tuple[PointCloud, list[dict[str, Any]], d
     for k in ("instance", "class_id", "pixel"):
         if k in fields:
             fields[k] = np.asarray(fields[k]).astype(np.int32)
-    return cloud.replace(fields=fields), objects["objects"], scene
+    cloud = cloud.replace(fields=fields)
+    sensor = scene.get("sensor")
+    trajectory = scene.get("trajectory")
+    if isinstance(sensor, dict) and sensor.get("name") == "rgbd-frame" and trajectory:
+        # One camera saw every point: detection may reason about what it could not see.
+        try:
+            eye = np.asarray(trajectory[0], dtype=np.float64)[:3, 3]
+        except (TypeError, ValueError, IndexError) as err:
+            raise CorruptFileError(folder / "scene.json", "'trajectory' should hold 4 x 4 "
+                                   "camera poses") from err
+        meta: dict[str, Any] = {"sensor_position": eye.tolist()}
+        grid = scene.get("intrinsics") or {}
+        if "pixel" in cloud.fields and "grid_width" in grid and "grid_height" in grid:
+            meta.update(width=int(grid["grid_width"]), height=int(grid["grid_height"]))
+        cloud = cloud.with_meta(**meta)
+    return cloud, objects["objects"], scene

@@ -230,14 +230,17 @@ class SensorOutput:
         )
 
     def world_cloud(self) -> PointCloud:
-        """The cloud in the world frame (camera frames moved by their pose; maps keep scale)."""
+        """The cloud in the world frame (camera frames moved by their pose, with the
+        camera's position as ``meta["sensor_position"]``; maps keep scale)."""
         if self.frame != "camera":
             return self.cloud
         xyz = _transform(self.estimated_poses[0], self.cloud.xyz)
         normals = self.cloud.normals
         if normals is not None:
             normals = normals @ self.estimated_poses[0][:3, :3].T
-        return self.cloud.replace(xyz=xyz, normals=normals)
+        # The camera now stands at the pose's origin (ontodetect.cloud.sensor_position).
+        eye = self.estimated_poses[0][:3, 3].tolist()
+        return self.cloud.replace(xyz=xyz, normals=normals).with_meta(sensor_position=eye)
 
 
 # ----------------------------------------------------------------------------------------

@@ -1,0 +1,173 @@
+"""Single camera frames: the sensor's position, depth steps smoothed over the pixel grid, and
+parts an object hides from the sensor itself."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from ontodetect import InvalidParameterError, point_cloud
+from ontodetect.cloud import DataWarning, pixel_grid, sensor_position
+from ontodetect.config import Config
+from ontodetect.ontology import ClusterDescription, builtin_ontology
+from ontodetect.ontology._score import missing_factor
+from ontodetect.pipeline import detect, hidden_heights
+from ontodetect.preprocess import smooth_depth
+from ontodetect.synth import synthesize
+from ontodetect.synth.furniture import make_furniture, place
+from ontodetect.synth.sensors import _look_at, scan_rgbd_frame
+from test_synth_sensors import box_room
+
+IDENTITY_VIEW = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]
+
+
+def frame_of(depth: np.ndarray, f: float = 500.0) -> tuple[np.ndarray, np.ndarray]:
+    """Camera-frame points of a depth image (NaN: no return) and their row-major pixels."""
+    h, w = depth.shape
+    v, u = np.mgrid[0:h, 0:w]
+    rays = np.stack([(u - w / 2) / f, (v - h / 2) / f, np.ones_like(depth)], -1).reshape(-1, 3)
+    z = depth.reshape(-1)
+    keep = np.isfinite(z)
+    return rays[keep] * z[keep, None], np.flatnonzero(keep)
+
+
+def organized(depth: np.ndarray, **meta) -> object:
+    xyz, pixels = frame_of(depth)
+    h, w = depth.shape
+    return point_cloud(xyz, index=pixels).with_meta(
+        organized=True, width=w, height=h, viewpoint=IDENTITY_VIEW, **meta)
+
+
+# -- where the sensor was ---------------------------------------------------------------------
+def test_sensor_position_of_frames_and_of_fused_scans():
+    frame = organized(np.full((4, 4), 2.0))
+    assert sensor_position(frame).tolist() == [0.0, 0.0, 0.0]
+    moved = frame.with_meta(viewpoint=[1.0, 2.0, 3.0, 1.0, 0.0, 0.0, 0.0])
+    assert sensor_position(moved).tolist() == [1.0, 2.0, 3.0]
+    # an explicit position wins; a fused scan has none, even with a PCD's default VIEWPOINT
+    assert sensor_position(frame.with_meta(sensor_position=[0, 0, 1])).tolist() == [0, 0, 1]
+    fused = point_cloud(np.zeros((3, 3))).with_meta(organized=False, viewpoint=IDENTITY_VIEW)
+    assert sensor_position(fused) is None
+
+
+@pytest.mark.parametrize("bad", [[1.0, 2.0], [0.0, math.nan, 1.0], "here"])
+def test_a_bad_viewpoint_is_refused_by_name(bad):
+    with pytest.raises(InvalidParameterError, match="viewpoint"):
+        detect(point_cloud(np.zeros((5, 3))), viewpoint=bad)
+
+
+def test_a_viewpoint_without_a_pixel_grid_is_used_with_a_warning():
+    scan = synthesize("tiny", seed=1).cloud  # fused from many frames: rows are no pixels
+    with pytest.warns(DataWarning, match="pixel grid"):
+        detect(scan, viewpoint=[0.5, 0.5, 1.5], votes=1)
+
+
+def test_pixel_grid_from_organized_rows_or_a_pixel_field():
+    frame = organized(np.array([[2.0, np.nan], [2.0, 2.0]]))
+    pixels, w, h = pixel_grid(frame)
+    assert pixels.tolist() == [0, 2, 3] and (w, h) == (2, 2)
+    world = point_cloud(np.zeros((2, 3)), fields={"pixel": np.array([5, 1])}).with_meta(
+        width=3, height=2)
+    assert pixel_grid(world)[0].tolist() == [5, 1]
+    assert pixel_grid(point_cloud(np.zeros((2, 3)))) is None
+    assert pixel_grid(world.with_meta(width=2)) is None  # pixel 5 is outside a 2 x 2 grid
+
+
+# -- depth steps --------------------------------------------------------------------------------
+def test_depth_steps_of_a_slanted_floor_are_smoothed_along_the_rays():
+    # The floor z_cam = 3 + 2 y_cam seen by a camera pitched down, its depth in 3 cm
+    # steps (a Kinect at 3 m): depth along pixel row v is 3 / (1 - 2 (v - h/2) / f).
+    h, w = 60, 80
+    v, _ = np.mgrid[0:h, 0:w]
+    true = 3.0 / (1.0 - 2.0 * (v - h / 2) / 500.0)
+    frame = organized(np.round(true / 0.03) * 0.03)
+    smooth = smooth_depth(frame)
+
+    def off_plane(xyz: np.ndarray) -> np.ndarray:
+        return np.abs(xyz[:, 2] - 3.0 - 2.0 * xyz[:, 1]) / math.hypot(1.0, 2.0)
+
+    inner = np.zeros((h, w), bool)
+    inner[4:-4, 4:-4] = True  # the filter's window stays inside the image
+    inner = inner.reshape(-1)
+    before, after = off_plane(frame.xyz[inner]), off_plane(smooth.xyz[inner])
+    assert before.mean() > 0.003 and before.max() > 0.006  # up to half a step off the floor
+    assert after.mean() < 0.3 * before.mean() and after.max() < 0.4 * before.max()
+    # points moved only along their rays; rows, fields and meta are kept
+    cos = np.einsum("ij,ij->i", smooth.xyz, frame.xyz) / (
+        np.linalg.norm(smooth.xyz, axis=1) * np.linalg.norm(frame.xyz, axis=1))
+    assert np.all(cos > 1 - 1e-9)
+    assert np.array_equal(smooth.index, frame.index) and smooth.meta == frame.meta
+
+
+def test_depth_edges_between_objects_stay_sharp():
+    depth = np.full((40, 40), 3.0)
+    depth[:, :20] = 2.0  # a box 1 m in front of a wall
+    smooth = smooth_depth(organized(depth)).xyz[:, 2]
+    assert np.all((np.abs(smooth - 2.0) < 0.005) | (np.abs(smooth - 3.0) < 0.005))
+
+
+def test_clouds_that_are_not_one_frame_are_left_alone():
+    fused = point_cloud(np.random.default_rng(0).random((50, 3)))
+    assert smooth_depth(fused) is fused
+    frame = organized(np.full((4, 4), 2.0))
+    no_sensor = frame.with_meta(organized=False)  # rows are not pixels any more
+    assert smooth_depth(no_sensor) is no_sensor
+
+
+# -- what an object hides itself ------------------------------------------------------------------
+@settings(max_examples=60, deadline=None)
+@given(top=st.floats(0.3, 1.4), eye=st.floats(0.2, 2.5), d=st.floats(0.5, 8.0))
+def test_hidden_height_lies_under_the_top_and_rises_with_distance(top, eye, d):
+    tops = np.array([top, top])
+    near_far = np.array([[d, 0.0], [d + 1.0, 0.0]])
+    near, far = hidden_heights(tops, near_far, [0.0, 0.0, eye])
+    assert near <= top and near <= far <= top
+    if eye <= top:  # looking up at it or level with its top: everything behind is hidden
+        assert near == far == top
+    # the shadow really is SELF_SHADOW long at that height
+    if eye > top:
+        assert math.isclose((top - near) * d / (eye - top), 0.3, rel_tol=1e-9)
+
+
+def _backrest_only(bottom: float, hidden_below: float, shelter: float = -math.inf):
+    return ClusterDescription(planes=[], relations={}, length=0.5, breadth=0.2, height=0.95,
+                              bottom=bottom, shelter=shelter, hidden_below=hidden_below)
+
+
+def test_a_seat_hidden_behind_its_backrest_counts_as_occluded():
+    seat = next(p for p in builtin_ontology()["chair"].parts if p.name == "seat")
+    # seen from behind: the seat's height (0.35-0.75, centre 0.55) is in the backrest's shadow
+    assert missing_factor(seat, _backrest_only(0.4, hidden_below=0.85)) == seat.occluded
+    # fused scan (nothing known), or the sensor too close above it to be hidden
+    assert missing_factor(seat, _backrest_only(0.4, hidden_below=-math.inf)) == seat.missing
+    assert missing_factor(seat, _backrest_only(0.4, hidden_below=0.5)) == seat.missing
+    # a screen standing on a desk (bottom 0.75): no seat hides 20 cm under what is seen
+    assert missing_factor(seat, _backrest_only(0.75, hidden_below=1.1)) == seat.missing
+    # standing on the floor: its lower part is not hidden but absent
+    assert missing_factor(seat, _backrest_only(0.05, hidden_below=0.85)) == seat.missing
+
+
+def test_an_office_chair_seen_from_behind_is_found_in_a_single_frame():
+    chair = dataclasses.replace(place(make_furniture("chair-office", 4), 3.0, 3.5, 0.0),
+                                instance_id=7)
+    scene = box_room([chair], size=(6.0, 6.0, 2.6))
+    # the camera stands 2.75 m behind the chair, 1.2 m up: the backrest hides the seat
+    pose = _look_at(np.array([[3.0, 0.75, 1.2]]), np.array([[3.0, 3.5, 0.5]]))[0]
+    frame = scan_rgbd_frame(scene, pose=pose, rng=0, stride=2, disparity_step=0).world_cloud()
+    assert np.allclose(sensor_position(frame), [3.0, 0.75, 1.2])
+    plain = Config().with_overrides(["prepare.depth_smoothing=false"])  # no depth steps here
+    found = detect(frame, seed=0, config=plain)
+    assert [d.label for d in found.detections] == ["chair"]
+    chair_pixels = frame.index[frame.fields["instance"] == 7]  # a frame's rows are pixels
+    rows = found.detections[0].point_indices
+    assert np.isin(rows, chair_pixels).mean() > 0.95 and len(rows) > 0.5 * len(chair_pixels)
+    scores = found.scores[found.detections[0].cluster].classes["chair"]
+    assert scores.assignment["seat"] is None
+    # the same points as a scan of unknown origin: a lone backrest is not a chair
+    fused = frame.with_meta(sensor_position=None, organized=False)
+    assert detect(fused, seed=0, config=plain).detections == []
