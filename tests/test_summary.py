@@ -45,3 +45,14 @@ def test_describe_cloud(rng):
     assert s.extent[0] == pytest.approx(5.0, abs=0.05)
     d = s.to_dict()
     assert d["units"] == "metres"
+
+
+def test_describe_cloud_tells_a_single_view_from_a_fused_scan(rng):
+    fused = describe_cloud(point_cloud(_room(rng)))
+    assert fused.sensor is None and fused.to_dict()["sensor"] is None
+    xyz = rng.random((6, 3)) + [0.0, 0.0, 1.0]
+    frame = point_cloud(xyz, index=[0, 1, 2, 4, 5, 7]).with_meta(
+        organized=True, width=4, height=2, viewpoint=[0.5, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0])
+    assert describe_cloud(frame).sensor == [0.5, 0.0, 0.0]
+    # an unorganized cloud's VIEWPOINT (a PCD default) says nothing about one view
+    assert describe_cloud(frame.with_meta(organized=False)).sensor is None

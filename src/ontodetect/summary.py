@@ -15,7 +15,8 @@ from typing import Any
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .cloud import PointCloud
+from .cloud import PointCloud, pixel_grid, sensor_position
+from .errors import InvalidParameterError
 
 __all__ = ["CloudSummary", "describe_cloud", "estimate_spacing", "guess_units", "guess_up_axis"]
 
@@ -44,6 +45,9 @@ class CloudSummary:
     up_axis: str
     up_confidence: float
     extra: dict[str, Any] = field(default_factory=dict)
+    #: Where the sensor stood when the cloud is one camera frame with its pixel grid
+    #: (:func:`ontodetect.cloud.sensor_position`), else None.
+    sensor: list[float] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON-ready dictionary."""
@@ -194,4 +198,15 @@ def describe_cloud(cloud: PointCloud, *, seed: int = 0) -> CloudSummary:
         up_axis=up,
         up_confidence=conf,
         extra={k: v for k, v in extra.items() if isinstance(v, (str, int, float, bool, list))},
+        sensor=_single_view_sensor(cloud),
     )
+
+
+def _single_view_sensor(cloud: PointCloud) -> list[float] | None:
+    try:
+        eye = sensor_position(cloud)
+    except InvalidParameterError:
+        return None
+    if eye is None or pixel_grid(cloud) is None:
+        return None
+    return [float(v) for v in eye]

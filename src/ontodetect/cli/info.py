@@ -47,4 +47,7 @@ def info(
     table.add_row("up axis (guess)", f"{summary.up_axis} (confidence {summary.up_confidence:.2f})")
     for k, v in summary.extra.items():
         table.add_row(k, str(v))
+    if summary.sensor is not None:
+        table.add_row("single view", f"sensor at {fmt3(summary.sensor)}: detection smooths its "
+                      "depth steps and knows what objects hide from it")
     console.print(table)
