@@ -101,7 +101,9 @@ def test_depth_steps_of_a_slanted_floor_are_smoothed_along_the_rays():
     cos = np.einsum("ij,ij->i", smooth.xyz, frame.xyz) / (
         np.linalg.norm(smooth.xyz, axis=1) * np.linalg.norm(frame.xyz, axis=1))
     assert np.all(cos > 1 - 1e-9)
-    assert np.array_equal(smooth.index, frame.index) and smooth.meta == frame.meta
+    assert np.array_equal(smooth.index, frame.index)
+    assert smooth.meta == {**frame.meta, "depth_smoothed": True}
+    assert smooth_depth(smooth) is smooth  # smoothed once, as detect does for all passes
 
 
 def test_depth_edges_between_objects_stay_sharp():

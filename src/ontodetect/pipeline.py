@@ -39,6 +39,7 @@ from .ontology import (
     score_cluster,
 )
 from .ontology._score import HORIZONTAL_TILT
+from .preprocess import smooth_depth
 from .render import box_corners
 from .segment import Cluster, Segmentation, segment
 
@@ -449,14 +450,19 @@ def detect(
               for t in vote_turns(passes, d.vote_turn)]
     workers = _vote_workers(jobs, len(turned))
     t0 = time.perf_counter()
+    # A frame's depth steps do not depend on the pass's turn: smooth them once for all
+    # (counted in "segment", where preparation would have smoothed them).
+    scan = smooth_depth(cloud) if config.prepare.depth_smoothing else cloud
+    smoothing = time.perf_counter() - t0
     if workers:
         with ProcessPoolExecutor(max_workers=workers, mp_context=fork_context()) as pool:
-            futures = [pool.submit(_pass_clusters, cloud, c, opts) for c in turned]
-            seg, scores, choices, found, timings = _one_pass(cloud, config, **opts)
+            futures = [pool.submit(_pass_clusters, scan, c, opts) for c in turned]
+            seg, scores, choices, found, timings = _one_pass(scan, config, **opts)
             others = [f.result() for f in futures]
     else:
-        seg, scores, choices, found, timings = _one_pass(cloud, config, **opts)
-        others = [_pass_clusters(cloud, c, opts) for c in turned]
+        seg, scores, choices, found, timings = _one_pass(scan, config, **opts)
+        others = [_pass_clusters(scan, c, opts) for c in turned]
+    timings["segment"] += smoothing
     if turned:
         found, choices = _vote(cloud, seg, scores, choices, found, others, ontology)
         timings["votes"] = time.perf_counter() - t0 - sum(timings.values())

@@ -32,8 +32,9 @@ def smooth_depth(cloud: PointCloud) -> PointCloud:
     """``cloud`` with its depth steps smoothed, when it is one organized frame.
 
     Needs the pixel grid (:func:`ontodetect.cloud.pixel_grid`) and the sensor's
-    position (:func:`ontodetect.cloud.sensor_position`); any other cloud comes back
-    unchanged. Each point keeps its row, colour and fields and moves along the ray
+    position (:func:`ontodetect.cloud.sensor_position`); any other cloud, or one this
+    function already smoothed (``meta["depth_smoothed"]``), comes back unchanged. Each
+    point keeps its row, colour and fields and moves along the ray
     from the sensor to the bilaterally filtered inverse range of its pixel
     (Open3D's ``Image.filter_bilateral``; pixels without a return weigh nothing,
     since their value 0 is far from any real inverse depth).
@@ -51,6 +52,8 @@ def smooth_depth(cloud: PointCloud) -> PointCloud:
     >>> round(float(np.ptp(steps)), 3), round(float(np.ptp(depth[5:15, 5:15])), 3)  # 3 cm: 7 mm
     (0.03, 0.007)
     """
+    if cloud.meta.get("depth_smoothed"):
+        return cloud
     grid = pixel_grid(cloud)
     eye = sensor_position(cloud)
     if grid is None or eye is None or not len(cloud):
@@ -72,4 +75,4 @@ def smooth_depth(cloud: PointCloud) -> PointCloud:
     moved = valid & (inverse > 0)
     factor = np.ones(len(cloud))
     factor[moved] = 1.0 / (inverse[moved] * distance[moved])
-    return cloud.replace(xyz=eye + rays * factor[:, None])
+    return cloud.replace(xyz=eye + rays * factor[:, None]).with_meta(depth_smoothed=True)
