@@ -58,6 +58,26 @@ def test_threshold_and_not_reported_classes():
     assert out[2].label is None and "stool" in out[2].reason
 
 
+def test_classes_sharing_a_label_are_weighed_together():
+    """A small top whose table-ness is split between "table" and "side_table" (0.25 + 0.2)
+    is a table, not the chair (0.3) that beats each of them alone; the costs of both classes
+    use the label's probability, 0.45."""
+    o = builtin_ontology()
+    s = scores(chair=0.3, table=0.25, side_table=0.2)
+    top = [plane(0.55, 0.5)]
+    costs = label_costs(s, top, o)
+    f = float(o["side_table"].labeling.plane_size(0.55))
+    assert costs["side_table"] == pytest.approx(energy(0.45, f))
+    (choice,) = label_clusters([s], [top], o)
+    assert choice.label == "table" and choice.extra["class"] == "side_table"
+    # Neither class alone passes the threshold, nor beats "none"; the label does both.
+    probs = {"table": 0.12, "side_table": 0.1, "chair": 0.14, "sofa": 0.14, "stool": 0.14,
+             "bench": 0.14, "cabinet": 0.08, "none": 0.14}
+    split = ClusterScores(classes={}, probabilities=probs, best="chair")
+    (choice,) = label_clusters([split], [top], o, threshold=0.15)
+    assert choice.label == "table"
+
+
 def test_exclusion_keeps_the_cheaper_of_two_overlapping_hypotheses():
     o = builtin_ontology()
     s = [scores(chair=0.5), scores(chair=0.9)]

@@ -78,6 +78,14 @@ def stool():
     return cluster([P(tilt=1, height=0.62, length=0.35, width=0.33)], length=0.38)
 
 
+def side_table():
+    return cluster([P(tilt=1, height=0.6, length=0.55, width=0.5)], length=0.58)
+
+
+def ottoman():
+    return cluster([P(tilt=2, height=0.42, length=0.6, width=0.48)], length=0.62)
+
+
 def high_table():
     return cluster([P(tilt=1, height=0.74, length=1.4, width=0.8)], length=1.45)
 
@@ -89,7 +97,8 @@ def sofa():
 
 
 @pytest.mark.parametrize(("make", "expected"), [
-    (chair, "chair"), (stool, "stool"), (high_table, "table"), (sofa, "sofa")])
+    (chair, "chair"), (stool, "stool"), (high_table, "table"), (sofa, "sofa"),
+    (side_table, "side_table"), (ottoman, "ottoman")])
 def test_hand_made_clusters_get_their_class(make, expected):
     scores = score_cluster(make(), builtin_ontology())
     assert scores.best == expected
@@ -101,6 +110,30 @@ def test_stool_is_not_a_chair_and_table_is_not_a_chair():
     o = builtin_ontology()
     assert score_cluster(stool(), o).probabilities["chair"] < 0.2
     assert score_cluster(high_table(), o).probabilities["chair"] < 0.05
+
+
+def test_small_tops_by_height_and_size():
+    """A bare top 55 cm across at 60 cm is a side table (reported as "table"), a 35 cm one a
+    stool; a 60 cm seat at 42 cm is an ottoman; none of them a chair."""
+    o = builtin_ontology()
+    assert o["side_table"].label == "table" and o["side_table"].detect
+    assert not o["ottoman"].detect and not o["stool"].detect
+    for make in (side_table, stool, ottoman):
+        assert score_cluster(make(), o).probabilities["chair"] < 0.15
+    lower = score_cluster(cluster([P(tilt=1, height=0.45, length=0.55, width=0.5)],
+                                  length=0.58), o)
+    assert lower.probabilities["side_table"] < 0.1  # below a side table's height
+
+
+def test_label_probability_sums_the_classes_written_under_a_label():
+    from ontodetect.labeling import label_probability
+
+    o = builtin_ontology()
+    p = {"table": 0.3, "side_table": 0.25, "chair": 0.1, "cabinet": 0.2, "none": 0.15}
+    assert label_probability(p, o, "table") == pytest.approx(0.55)
+    assert label_probability(p, o, "chair") == pytest.approx(0.1)
+    assert label_probability(p, o, "cabinet") == pytest.approx(0.2)
+    assert label_probability(p, o, "sofa") == 0.0
 
 
 def test_chair_assignment_and_factors():

@@ -29,7 +29,7 @@ from .cloud import DataWarning, PointCloud, as_position, pixel_grid, sensor_posi
 from .config import Config
 from .errors import InvalidParameterError
 from .evaluation._match import Instance, overlap_matrix
-from .labeling import LabelChoice, label_clusters
+from .labeling import LabelChoice, label_clusters, label_probability
 from .ontology import (
     ClusterDescription,
     ClusterScores,
@@ -61,9 +61,11 @@ class Detection:
     id : int
         1, 2, ... in order of decreasing score.
     label : str
-        Class name from the ontology.
+        The label of the winning class (its name unless the ontology gives a ``label``).
     score : float
-        P_obj|ont of the label (``probabilities[label's class]``).
+        P_obj|ont of the label: ``probabilities`` of the classes written under it,
+        summed (:func:`ontodetect.labeling.label_probability`); with one class per
+        label, that class's.
     probabilities, costs : mapping of str to float
         P_obj|ont and energy U of every class. With ``detect.votes`` > 1 the
         probabilities are means over the passes (:func:`pass_probabilities`); the
@@ -539,13 +541,14 @@ def _one_pass(cloud: PointCloud, config: Config, *, ontology: Ontology,
                              threshold=threshold, centers=centers, context=context)
     timings["label"] = time.perf_counter() - t0
     detections = [_detection(cloud, seg, k, scores[k], choice.label, choice.extra["class"],
-                             choice.costs)
+                             choice.costs, ontology)
                   for k, choice in enumerate(choices) if found and choice.label is not None]
     return seg, scores, choices, detections, timings
 
 
 def _detection(cloud: PointCloud, seg: Segmentation, k: int, scores: ClusterScores,
-               label: str, cls_name: str, costs: Mapping[str, float], votes: int | None = None,
+               label: str, cls_name: str, costs: Mapping[str, float], ontology: Ontology,
+               votes: int | None = None,
                probabilities: Mapping[str, float] | None = None) -> Detection:
     """Cluster ``k`` as a detection; its probabilities are the cluster's unless given."""
     c = seg[k]
@@ -553,7 +556,7 @@ def _detection(cloud: PointCloud, seg: Segmentation, k: int, scores: ClusterScor
         probabilities = scores.probabilities
     center, size, yaw = _to_input_frame(seg, c)
     return Detection(
-        id=0, label=label, score=float(probabilities[cls_name]),
+        id=0, label=label, score=label_probability(probabilities, ontology, label),
         probabilities={n: float(p) for n, p in probabilities.items() if n != "none"},
         costs=dict(costs), center=center, size=size, yaw=yaw,
         point_indices=np.sort(cloud.index[c.point_indices]),
@@ -690,12 +693,12 @@ def _vote(cloud: PointCloud, seg: Segmentation, scores: list[ClusterScores],
         label, n = kept[k]
         probabilities = {name: p for name, p in mean.items() if name != "none"}
         if k in first and first[k].label == label:
-            cls_name = choices[k].extra["class"]
-            out.append(dataclasses.replace(first[k], votes=n, probabilities=probabilities,
-                                           score=probabilities[cls_name]))
+            out.append(dataclasses.replace(
+                first[k], votes=n, probabilities=probabilities,
+                score=label_probability(probabilities, ontology, label)))
             continue
         cls_name = next(o.name for o in ontology.classes if o.label == label and o.detect)
         choices[k] = LabelChoice(label, choices[k].costs, "", {"class": cls_name})
         out.append(_detection(cloud, seg, k, scores[k], label, cls_name, choices[k].costs,
-                              votes=n, probabilities=mean))
+                              ontology, votes=n, probabilities=mean))
     return out, choices

@@ -7,7 +7,9 @@ For cluster c and label l the unary energy is
 with p the class probability P_obj|ont of l and f(c, l) the product over the
 cluster's planes of the label's colour and plane-size Gaussians (Eq. 3.8). As in
 Algorithm 1, only clusters whose best class probability reaches the decision
-threshold are labelled, and only with labels at or above it.
+threshold are labelled, and only with labels at or above it. Classes written under
+one label (a side table and a table) are kinds of one object: p, the threshold and
+the "none" test use the label's probability, the sum of theirs.
 
 Two pairwise terms make the labelling a small random field, solved exactly by
 enumeration per connected group of interacting clusters (greedy refinement only
@@ -40,6 +42,7 @@ __all__ = [
     "label_clusters",
     "label_costs",
     "label_fit",
+    "label_probability",
 ]
 
 #: Largest number of joint labellings enumerated exactly in one group of clusters.
@@ -87,6 +90,22 @@ def label_fit(planes: Sequence[Any], model: LabelModel) -> float:
     return f
 
 
+def label_probability(probabilities: Mapping[str, float], ontology: Ontology,
+                      label: str) -> float:
+    """How likely a cluster is a ``label``: the probabilities of the classes written under
+    that label, summed (the built-in side table and table are both "table").
+
+    Examples
+    --------
+    >>> from ontodetect.ontology import builtin_ontology
+    >>> label_probability({"table": 0.3, "side_table": 0.25, "chair": 0.1},
+    ...                   builtin_ontology(), "table")
+    0.55
+    """
+    return float(sum(probabilities.get(c.name, 0.0) for c in ontology.classes
+                     if c.label == label))
+
+
 def label_costs(
     scores: ClusterScores,
     planes: Sequence[Any],
@@ -95,9 +114,14 @@ def label_costs(
     beta: float = 0.5,
     gamma: float = 0.5,
 ) -> dict[str, float]:
-    """U(c, l) for every class of the ontology (Table 4.9 shows such costs)."""
+    """U(c, l) for every class of the ontology (Table 4.9 shows such costs).
+
+    p is the probability of the class's label (:func:`label_probability`): classes that
+    share a label are kinds of one object, so a side table does not lose the cluster to a
+    chair because the cluster's table-ness is split between "table" and "side_table".
+    """
     return {
-        cls.name: energy(scores.probabilities.get(cls.name, 0.0),
+        cls.name: energy(label_probability(scores.probabilities, ontology, cls.label),
                          label_fit(planes, cls.labeling), beta=beta, gamma=gamma)
         for cls in ontology.classes
     }
@@ -162,13 +186,17 @@ def label_clusters(
     n = len(scores)
     costs = [label_costs(s, pl, ontology, beta=beta, gamma=gamma) for s, pl in zip(scores, planes)]
     options: list[list[str | None]] = []
+    nothing: list[bool] = []
     for s, c in zip(scores, costs):
-        # Algorithm 1: the cluster is kept when its best class passes the threshold; and a
-        # cluster that "none of the classes" explains best is not an object.
-        if s.best == NONE:
+        # Algorithm 1: the cluster is kept when its best label passes the threshold; and a
+        # cluster that "none of the classes" explains better than any label is not an object.
+        by_class = {k: label_probability(s.probabilities, ontology, ontology[k].label)
+                    for k in c}
+        nothing.append(s.probabilities.get(NONE, 0.0) > max(by_class.values(), default=0.0))
+        if nothing[-1]:
             options.append([None])
             continue
-        allowed = [k for k in c if s.probabilities.get(k, 0.0) >= threshold]
+        allowed = [k for k in c if by_class[k] >= threshold]
         allowed.sort(key=lambda k: (c[k], k))
         options.append([*allowed, None] if allowed else [None])
 
@@ -241,10 +269,9 @@ def label_clusters(
 
     out = []
     for i, label in enumerate(chosen):
-        s = scores[i]
         if label is None:
             reason = ("below threshold" if options[i] == [None] else "excluded by an overlap")
-            if s.best == NONE:
+            if nothing[i]:
                 reason = "none of the classes"
             out.append(LabelChoice(None, costs[i], reason))
             continue
