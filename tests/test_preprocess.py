@@ -18,6 +18,7 @@ from ontodetect.preprocess import (
     estimate_up,
     far_outlier_mask,
     find_floor,
+    find_ground,
     guess_scale,
     level_transform,
     manhattan_axes,
@@ -316,6 +317,26 @@ def test_prepare_does_not_modify_input_and_is_deterministic(rng):
     assert np.array_equal(a.cloud.xyz, b.cloud.xyz)
     assert np.array_equal(a.point_to_voxel, b.point_to_voxel)
     assert np.array_equal(a.structure_label, b.structure_label)
+
+
+def test_a_shared_ground_gives_the_same_scene_at_every_turn(rng):
+    """Passes that differ in their turn share one find_ground; each comes out as if it had
+    prepared the scan alone."""
+    pts, _ = room(rng)
+    tilted = transform(pts, Rotation.from_euler("x", 8, degrees=True).as_matrix(), (0, 0, 0.6))
+    cloud = point_cloud(tilted)
+    ground = find_ground(cloud, up="auto")
+    assert ground.num_points == len(pts) and ground.floor.found
+    for turn in (0.0, 0.7, -12.0):
+        cfg = Config().replace(prepare={"turn": turn})
+        alone, shared = prepare(cloud, cfg, up="auto"), prepare(cloud, cfg, ground=ground)
+        assert np.array_equal(alone.to_level, shared.to_level)
+        assert np.array_equal(alone.cloud.xyz, shared.cloud.xyz)
+        assert np.array_equal(alone.point_to_voxel, shared.point_to_voxel)
+        assert np.array_equal(alone.structure_label, shared.structure_label)
+        assert np.array_equal(alone.object_mask, shared.object_mask)
+    with pytest.raises(InvalidParameterError, match="'ground'"):
+        prepare(point_cloud(pts[:-5]), ground=ground)
 
 
 def test_prepare_rejects_empty_and_bad_up():

@@ -39,7 +39,7 @@ from .ontology import (
     score_cluster,
 )
 from .ontology._score import HORIZONTAL_TILT
-from .preprocess import smooth_depth
+from .preprocess import Ground, find_ground, smooth_depth
 from .render import box_corners
 from .segment import Cluster, Segmentation, segment
 
@@ -452,9 +452,12 @@ def detect(
               for t in vote_turns(passes, d.vote_turn)]
     workers = _vote_workers(jobs, len(turned))
     t0 = time.perf_counter()
-    # A frame's depth steps do not depend on the pass's turn: smooth them once for all
-    # (counted in "segment", where preparation would have smoothed them).
+    # A frame's depth steps, its scale, voxels, up direction and floor do not depend on the
+    # pass's turn: find them once for all passes (counted in "segment", where preparation
+    # would have found them).
     scan = smooth_depth(cloud) if config.prepare.depth_smoothing else cloud
+    if turned:
+        opts["ground"] = find_ground(scan, config, scale=scale, up=up)
     smoothing = time.perf_counter() - t0
     if workers:
         with ProcessPoolExecutor(max_workers=workers, mp_context=fork_context()) as pool:
@@ -518,13 +521,14 @@ def _one_pass(cloud: PointCloud, config: Config, *, ontology: Ontology,
               priors: Mapping[str, float], threshold: float, beta: float,
               none_likelihood: float, context: float, seed: int, up: Any, scale: Any,
               viewpoint: NDArray[np.float64] | None = None, found: bool = True,
+              ground: Ground | None = None,
               ) -> tuple[Segmentation, list[ClusterScores], list[LabelChoice], list[Detection],
                          dict[str, float]]:
     """Segment, score and label once; detections (when ``found``) numbered 0, in cluster
     order."""
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
-    seg = segment(cloud, config, seed=seed, up=up, scale=scale)
+    seg = segment(cloud, config, seed=seed, up=up, scale=scale, ground=ground)
     timings["segment"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()

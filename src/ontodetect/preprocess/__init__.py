@@ -14,7 +14,9 @@
 6. floor, walls and ceiling (:func:`find_structure`), kept apart from objects, and the
    altitude cut-off.
 
-Every step is also a public function on arrays.
+Every step is also a public function on arrays. :func:`find_ground` runs steps 1–3
+alone (up to the floor plane, nothing that depends on ``prepare.turn``), so that the
+passes of a vote over one scan share them (``prepare(..., ground=...)``).
 """
 
 from __future__ import annotations
@@ -58,6 +60,7 @@ __all__ = [
     "CellPlanes",
     "FloorFit",
     "FloorMap",
+    "Ground",
     "PreparedScene",
     "StructurePlane",
     "VoxelGrid",
@@ -68,6 +71,7 @@ __all__ = [
     "estimate_up",
     "far_outlier_mask",
     "find_floor",
+    "find_ground",
     "find_structure",
     "floor_height_map",
     "graph_normals",
@@ -351,60 +355,60 @@ def _up_hint(cloud: PointCloud) -> tuple[str, float | None]:
     return "z", None
 
 
-def prepare(
-    cloud: PointCloud | ArrayLike,
+@dataclass(frozen=True)
+class Ground:
+    """What preparation finds before it turns the scan (:func:`find_ground`): the scale,
+    the denoised voxels in the input frame, the up direction and the floor plane.
+
+    Attributes
+    ----------
+    num_points : int
+        Points of the cloud it was found in.
+    scale, scale_source : float, str
+        ``k_s`` and how it was chosen.
+    voxels : VoxelGrid
+        Denoised voxels of the scaled input.
+    inliers : (n,) bool
+        Points that kept a voxel.
+    spacing, cell : float
+        Sampling spacing (:func:`surface_spacing`) and structure cell size (m).
+    up_confidence : float
+        Confidence of an estimated up direction (1 when given).
+    cells : CellPlanes
+        Plane fits of the input-frame cells.
+    floor : FloorFit
+        The floor plane (its normal is the up direction).
+    laps : dict
+        Seconds per step.
+    """
+
+    num_points: int
+    scale: float
+    scale_source: str
+    voxels: VoxelGrid
+    inliers: NDArray[np.bool_]
+    spacing: float
+    cell: float
+    up_confidence: float
+    cells: CellPlanes
+    floor: FloorFit
+    laps: dict[str, float] = field(default_factory=dict)
+
+
+def find_ground(
+    cloud: PointCloud,
     config: Config | None = None,
     *,
     scale: float | None = None,
     travelled: tuple[float, float] | None = None,
     up: str | ArrayLike | None = None,
-    seed: int | None = 0,
-) -> PreparedScene:
-    """Scale, denoise, level, voxelize and find the structure of a scan.
-
-    Parameters
-    ----------
-    cloud : PointCloud or (n, 3) float
-        The scan.
-    config : Config, optional
-        ``config.prepare`` drives this step; defaults from Table 4.1.
-    scale : float, optional
-        Scale factor ``k_s``; overrides ``travelled``, the configuration and the
-        units guess.
-    travelled : (float, float), optional
-        Distances travelled according to odometry and to the SLAM map, giving
-        ``k_s = D_e / D_s``.
-    up : str or (3,) float, optional
-        Up direction of the input: ``"z"``, ``"-y"``..., a vector, or ``"auto"``
-        to estimate it (hint: ``-y`` for organized camera frames, ``z`` otherwise).
-        Defaults to ``config.prepare.up``.
-    seed : int, optional
-        Accepted for a uniform signature; preparation has no random step.
-
-    Returns
-    -------
-    PreparedScene
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> rng = np.random.default_rng(0)
-    >>> floor = np.c_[rng.random((4000, 2)) * 3, np.full(4000, 0.7)]
-    >>> box = np.c_[rng.random((800, 2)) * 0.4 + 1, rng.random(800) * 0.5 + 0.7]
-    >>> scene = prepare(np.vstack([floor, box]))
-    >>> round(scene.floor_z, 3), int(scene.object_mask.sum()) > 0
-    (0.7, True)
-    """
-    del seed  # deterministic: no random step
+) -> Ground:
+    """Scale, denoise and voxelize a scan and find its up direction and floor: the steps
+    of :func:`prepare` that do not depend on ``prepare.turn`` (parameters as there; a
+    frame's depth steps are expected smoothed already)."""
     cfg = (config or Config()).prepare
-    if not isinstance(cloud, PointCloud):
-        cloud = point_cloud(cloud)
-    if cfg.depth_smoothing:
-        cloud = smooth_depth(cloud)  # only a single organized frame with its sensor changes
     xyz = cloud.xyz
     n = len(xyz)
-    if n == 0:
-        raise InvalidParameterError("cloud", "a cloud with at least one point", "0 points")
     clock = _Clock()
     k_s, scale_source = _choose_scale(xyz, cfg, scale, travelled)
     scaled = xyz * k_s if k_s != 1.0 else xyz
@@ -467,6 +471,80 @@ def prepare(
         and np.degrees(np.arccos(min(1.0, abs(float(floor.normal @ u))))) < LEVEL_MIN_ANGLE
     ):
         floor = FloorFit(u, floor.offset, floor.area, floor.found)
+    clock.lap("ground")
+    return Ground(n, k_s, scale_source, grid, inliers, float(spacing), float(cell),
+                  float(confidence), cells, floor, dict(clock.laps))
+
+
+def prepare(
+    cloud: PointCloud | ArrayLike,
+    config: Config | None = None,
+    *,
+    scale: float | None = None,
+    travelled: tuple[float, float] | None = None,
+    up: str | ArrayLike | None = None,
+    seed: int | None = 0,
+    ground: Ground | None = None,
+) -> PreparedScene:
+    """Scale, denoise, level, voxelize and find the structure of a scan.
+
+    Parameters
+    ----------
+    cloud : PointCloud or (n, 3) float
+        The scan.
+    config : Config, optional
+        ``config.prepare`` drives this step; defaults from Table 4.1.
+    scale : float, optional
+        Scale factor ``k_s``; overrides ``travelled``, the configuration and the
+        units guess.
+    travelled : (float, float), optional
+        Distances travelled according to odometry and to the SLAM map, giving
+        ``k_s = D_e / D_s``.
+    up : str or (3,) float, optional
+        Up direction of the input: ``"z"``, ``"-y"``..., a vector, or ``"auto"``
+        to estimate it (hint: ``-y`` for organized camera frames, ``z`` otherwise).
+        Defaults to ``config.prepare.up``.
+    seed : int, optional
+        Accepted for a uniform signature; preparation has no random step.
+    ground : Ground, optional
+        This cloud's :func:`find_ground` with the same configuration (``scale``,
+        ``travelled`` and ``up`` are then not used): passes over one scan that differ
+        only in ``prepare.turn`` share it.
+
+    Returns
+    -------
+    PreparedScene
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> floor = np.c_[rng.random((4000, 2)) * 3, np.full(4000, 0.7)]
+    >>> box = np.c_[rng.random((800, 2)) * 0.4 + 1, rng.random(800) * 0.5 + 0.7]
+    >>> scene = prepare(np.vstack([floor, box]))
+    >>> round(scene.floor_z, 3), int(scene.object_mask.sum()) > 0
+    (0.7, True)
+    """
+    del seed  # deterministic: no random step
+    cfg = (config or Config()).prepare
+    if not isinstance(cloud, PointCloud):
+        cloud = point_cloud(cloud)
+    if cfg.depth_smoothing:
+        cloud = smooth_depth(cloud)  # only a single organized frame with its sensor changes
+    xyz = cloud.xyz
+    n = len(xyz)
+    if n == 0:
+        raise InvalidParameterError("cloud", "a cloud with at least one point", "0 points")
+    if ground is None:
+        ground = find_ground(cloud, config, scale=scale, travelled=travelled, up=up)
+    elif ground.num_points != n:
+        raise InvalidParameterError(
+            "ground", f"the ground of this cloud ({n} points)", f"{ground.num_points} points")
+    clock = _Clock()
+    clock.laps.update(ground.laps)
+    k_s, scale_source, colors = ground.scale, ground.scale_source, cloud.rgb
+    grid, inliers, spacing, cell = ground.voxels, ground.inliers, ground.spacing, ground.cell
+    confidence, cells, floor = ground.up_confidence, ground.cells, ground.floor
     to_level = level_transform(floor.normal, floor.offset, k_s)
     if cfg.turn:
         to_level = yaw_pose(0.0, 0.0, math.radians(cfg.turn)) @ to_level

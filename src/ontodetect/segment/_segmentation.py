@@ -15,7 +15,7 @@ from .._progress import progress
 from ..cloud import PointCloud, point_cloud
 from ..config import Config
 from ..errors import InvalidParameterError
-from ..preprocess import PreparedScene, graph_normals, prepare
+from ..preprocess import Ground, PreparedScene, graph_normals, prepare
 from ._cluster import core_neighbors, dbscan, euclidean_clusters, radius_graph, region_growing
 from ._parts import PartSeed, horizontal_parts, seeded_clusters
 from .planes import extract_planes, plane_relations
@@ -564,6 +564,7 @@ def segment(
     up: str | ArrayLike | None = None,
     scale: float | None = None,
     fit_planes: bool = True,
+    ground: Ground | None = None,
 ) -> Segmentation:
     """Prepare a scan and cluster it: the one-call API of steps 1–9 of Algorithm 1.
 
@@ -581,6 +582,9 @@ def segment(
         Scale factor ``k_s``.
     fit_planes : bool
         Fit MSAC planes in every cluster.
+    ground : Ground, optional
+        This cloud's :func:`ontodetect.preprocess.find_ground`, shared by passes that
+        differ only in ``prepare.turn`` (see :func:`ontodetect.preprocess.prepare`).
 
     Returns
     -------
@@ -599,5 +603,5 @@ def segment(
     config = config or Config()
     if not isinstance(cloud, PointCloud):
         cloud = point_cloud(cloud)
-    prepared = prepare(cloud, config, up=up, scale=scale, seed=seed)
+    prepared = prepare(cloud, config, up=up, scale=scale, seed=seed, ground=ground)
     return cluster(prepared, config, seed=seed, fit_planes=fit_planes)
