@@ -5,6 +5,8 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from ontodetect.errors import InvalidParameterError
 from ontodetect.labeling import energy, label_clusters, label_costs, label_fit
@@ -76,6 +78,38 @@ def test_classes_sharing_a_label_are_weighed_together():
     split = ClusterScores(classes={}, probabilities=probs, best="chair")
     (choice,) = label_clusters([split], [top], o, threshold=0.15)
     assert choice.label == "table"
+
+
+CLASSES = ("chair", "sofa", "table", "side_table", "stool", "ottoman", "bench", "cabinet",
+           "bed", "none")
+
+
+@settings(max_examples=200, deadline=None)
+@given(weights=st.lists(st.floats(0.0, 1.0), min_size=len(CLASSES), max_size=len(CLASSES)),
+       threshold=st.floats(0.05, 0.5))
+def test_a_label_is_chosen_only_when_its_probability_earns_it(weights, threshold):
+    """Whatever the probabilities: the chosen class's label reaches the threshold and beats
+    "none"; nothing is chosen when "none" beats every label or no label reaches the
+    threshold; and the labels' probabilities and "none" add up to 1."""
+    from ontodetect.labeling import label_probability
+
+    o = builtin_ontology()
+    total = sum(weights)
+    if total <= 0:
+        return
+    probs = {name: w / total for name, w in zip(CLASSES, weights)}
+    s = ClusterScores(classes={}, probabilities=probs, best=max(probs, key=probs.get))
+    (choice,) = label_clusters([s], [[plane(0.6, 0.5)]], o, threshold=threshold)
+    labels = {c.label for c in o.classes}
+    by_label = {lab: label_probability(probs, o, lab) for lab in labels}
+    assert sum(by_label.values()) + probs["none"] == pytest.approx(1.0)
+    best = max(by_label.values())
+    cls = choice.extra.get("class")
+    if cls is None:
+        assert probs["none"] > best or best < threshold
+    else:
+        assert by_label[o[cls].label] >= threshold
+        assert probs["none"] <= best
 
 
 def test_exclusion_keeps_the_cheaper_of_two_overlapping_hypotheses():
