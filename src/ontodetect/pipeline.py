@@ -458,7 +458,7 @@ def detect(
     scan = smooth_depth(cloud) if config.prepare.depth_smoothing else cloud
     if turned:
         opts["ground"] = find_ground(scan, config, scale=scale, up=up)
-    smoothing = time.perf_counter() - t0
+    shared = time.perf_counter() - t0
     if workers:
         with ProcessPoolExecutor(max_workers=workers, mp_context=fork_context()) as pool:
             futures = [pool.submit(_pass_clusters, scan, c, opts) for c in turned]
@@ -467,7 +467,7 @@ def detect(
     else:
         seg, scores, choices, found, timings = _one_pass(scan, config, **opts)
         others = [_pass_clusters(scan, c, opts) for c in turned]
-    timings["segment"] += smoothing
+    timings["segment"] += shared
     if turned:
         found, choices = _vote(cloud, seg, scores, choices, found, others, ontology)
         timings["votes"] = time.perf_counter() - t0 - sum(timings.values())

@@ -42,6 +42,7 @@ __all__ = [
     "label_clusters",
     "label_costs",
     "label_fit",
+    "label_probabilities",
     "label_probability",
 ]
 
@@ -102,8 +103,16 @@ def label_probability(probabilities: Mapping[str, float], ontology: Ontology,
     ...                   builtin_ontology(), "table")
     0.55
     """
-    return float(sum(probabilities.get(c.name, 0.0) for c in ontology.classes
-                     if c.label == label))
+    return label_probabilities(probabilities, ontology).get(label, 0.0)
+
+
+def label_probabilities(probabilities: Mapping[str, float], ontology: Ontology
+                        ) -> dict[str, float]:
+    """:func:`label_probability` of every label of the ontology, in one pass."""
+    out: dict[str, float] = {}
+    for c in ontology.classes:
+        out[c.label] = out.get(c.label, 0.0) + float(probabilities.get(c.name, 0.0))
+    return out
 
 
 def label_costs(
@@ -120,9 +129,10 @@ def label_costs(
     share a label are kinds of one object, so a side table does not lose the cluster to a
     chair because the cluster's table-ness is split between "table" and "side_table".
     """
+    by_label = label_probabilities(scores.probabilities, ontology)
     return {
-        cls.name: energy(label_probability(scores.probabilities, ontology, cls.label),
-                         label_fit(planes, cls.labeling), beta=beta, gamma=gamma)
+        cls.name: energy(by_label[cls.label], label_fit(planes, cls.labeling),
+                         beta=beta, gamma=gamma)
         for cls in ontology.classes
     }
 
@@ -190,13 +200,12 @@ def label_clusters(
     for s, c in zip(scores, costs):
         # Algorithm 1: the cluster is kept when its best label passes the threshold; and a
         # cluster that "none of the classes" explains better than any label is not an object.
-        by_class = {k: label_probability(s.probabilities, ontology, ontology[k].label)
-                    for k in c}
-        nothing.append(s.probabilities.get(NONE, 0.0) > max(by_class.values(), default=0.0))
+        by_label = label_probabilities(s.probabilities, ontology)
+        nothing.append(s.probabilities.get(NONE, 0.0) > max(by_label.values(), default=0.0))
         if nothing[-1]:
             options.append([None])
             continue
-        allowed = [k for k in c if by_class[k] >= threshold]
+        allowed = [k for k in c if by_label[ontology[k].label] >= threshold]
         allowed.sort(key=lambda k: (c[k], k))
         options.append([*allowed, None] if allowed else [None])
 

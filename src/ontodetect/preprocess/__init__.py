@@ -409,6 +409,8 @@ def find_ground(
     cfg = (config or Config()).prepare
     xyz = cloud.xyz
     n = len(xyz)
+    if n == 0:
+        raise InvalidParameterError("cloud", "a cloud with at least one point", "0 points")
     clock = _Clock()
     k_s, scale_source = _choose_scale(xyz, cfg, scale, travelled)
     scaled = xyz * k_s if k_s != 1.0 else xyz
@@ -533,8 +535,6 @@ def prepare(
         cloud = smooth_depth(cloud)  # only a single organized frame with its sensor changes
     xyz = cloud.xyz
     n = len(xyz)
-    if n == 0:
-        raise InvalidParameterError("cloud", "a cloud with at least one point", "0 points")
     if ground is None:
         ground = find_ground(cloud, config, scale=scale, travelled=travelled, up=up)
     elif ground.num_points != n:
