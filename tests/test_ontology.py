@@ -1,7 +1,7 @@
 """Ontology scoring on hand-made clusters with known answers."""
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pytest
@@ -86,6 +86,10 @@ def ottoman():
     return cluster([P(tilt=2, height=0.42, length=0.6, width=0.48)], length=0.62)
 
 
+def bench():
+    return cluster([P(tilt=1, height=0.45, length=1.4, width=0.38)], length=1.45, breadth=0.4)
+
+
 def high_table():
     return cluster([P(tilt=1, height=0.74, length=1.4, width=0.8)], length=1.45)
 
@@ -98,7 +102,7 @@ def sofa():
 
 @pytest.mark.parametrize(("make", "expected"), [
     (chair, "chair"), (stool, "stool"), (high_table, "table"), (sofa, "sofa"),
-    (side_table, "side_table"), (ottoman, "ottoman")])
+    (side_table, "side_table"), (ottoman, "ottoman"), (bench, "bench")])
 def test_hand_made_clusters_get_their_class(make, expected):
     scores = score_cluster(make(), builtin_ontology())
     assert scores.best == expected
@@ -123,6 +127,22 @@ def test_small_tops_by_height_and_size():
     lower = score_cluster(cluster([P(tilt=1, height=0.45, length=0.55, width=0.5)],
                                   length=0.58), o)
     assert lower.probabilities["side_table"] < 0.1  # below a side table's height
+
+
+def test_ottoman_stands_on_the_floor_and_bench_seats_several():
+    """An ottoman's sides reach the floor: the same 60 cm seat floating at 42 cm with nothing
+    seen below it (a chair whose legs and backrest went unseen) is no ottoman. A bench seats
+    two or more: a 1.4 m seat is one, a 60 cm seat fits it ten times worse."""
+    o = builtin_ontology()
+    standing = score_cluster(ottoman(), o).probabilities
+    floating = score_cluster(replace(ottoman(), bottom=0.37), o).probabilities
+    assert standing["ottoman"] > 0.5
+    assert floating["ottoman"] < 0.01
+    assert floating["chair"] > 2 * standing["chair"]
+    short = cluster([P(tilt=1, height=0.45, length=0.6, width=0.38)], length=0.63, breadth=0.4)
+    assert score_cluster(bench(), o).probabilities["bench"] > 0.5
+    bench_likelihood = score_cluster(bench(), o).classes["bench"].likelihood
+    assert score_cluster(short, o).classes["bench"].likelihood < 0.1 * bench_likelihood
 
 
 def test_label_probability_sums_the_classes_written_under_a_label():
