@@ -137,6 +137,23 @@ def test_pass_probabilities_average_the_covering_clusters():
     assert pass_probabilities([], [], others) == []
 
 
+def test_class_for_label_takes_the_cheapest_reported_class():
+    """A detection the first pass left out is reported as the class of its label that the
+    energy ranks first, not the first such class in the file."""
+    from ontodetect.errors import InvalidParameterError
+    from ontodetect.ontology import builtin_ontology
+    from ontodetect.pipeline import class_for_label
+
+    o = builtin_ontology()
+    assert class_for_label(o, "table", {"table": 0.6, "side_table": 0.4, "chair": 0.1}) == \
+        "side_table"
+    assert class_for_label(o, "table", {"table": 0.4, "side_table": 0.6}) == "table"
+    assert class_for_label(o, "table", {}) == "side_table"  # no costs: by name
+    assert class_for_label(o, "chair", {"side_table": 0.1}) == "chair"
+    with pytest.raises(InvalidParameterError, match="label"):
+        class_for_label(o, "stool", {"stool": 0.1})  # not reported
+
+
 def test_vote_turns_alternate():
     from ontodetect.pipeline import vote_turns
 

@@ -44,7 +44,8 @@ from .render import box_corners
 from .segment import Cluster, Segmentation, segment
 
 __all__ = [
-    "Detection", "Result", "describe_cluster", "describe_clusters", "detect", "hidden_heights",
+    "Detection", "Result", "class_for_label", "describe_cluster", "describe_clusters", "detect",
+    "hidden_heights",
     "majority_labels", "pass_probabilities", "shelter_heights", "vote_turns", "with_cad",
 ]
 
@@ -668,6 +669,16 @@ def pass_probabilities(
     return [{name: total / n for name, total in s.items()} for s in sums]
 
 
+def class_for_label(ontology: Ontology, label: str, costs: Mapping[str, float]) -> str:
+    """The reported class written under ``label`` that costs least in ``costs`` (the
+    energy's U per class; ties go to the name first in order): the class a cluster the
+    first pass left out is reported as when the other passes found it a ``label``."""
+    names = [o.name for o in ontology.classes if o.label == label and o.detect]
+    if not names:
+        raise InvalidParameterError("label", "the label of a reported class", label)
+    return min(names, key=lambda n: (costs.get(n, math.inf), n))
+
+
 def _vote(cloud: PointCloud, seg: Segmentation, scores: list[ClusterScores],
           choices: list[LabelChoice], found: list[Detection], others: list[list[PassCluster]],
           ontology: Ontology) -> tuple[list[Detection], list[LabelChoice]]:
@@ -701,7 +712,7 @@ def _vote(cloud: PointCloud, seg: Segmentation, scores: list[ClusterScores],
                 first[k], votes=n, probabilities=probabilities,
                 score=label_probability(probabilities, ontology, label)))
             continue
-        cls_name = next(o.name for o in ontology.classes if o.label == label and o.detect)
+        cls_name = class_for_label(ontology, label, choices[k].costs)
         choices[k] = LabelChoice(label, choices[k].costs, "", {"class": cls_name})
         out.append(_detection(cloud, seg, k, scores[k], label, cls_name, choices[k].costs,
                               ontology, votes=n, probabilities=mean))
