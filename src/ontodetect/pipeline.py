@@ -45,8 +45,8 @@ from .segment import Cluster, Segmentation, segment
 
 __all__ = [
     "Detection", "Result", "class_for_label", "describe_cluster", "describe_clusters", "detect",
-    "hidden_heights",
-    "majority_labels", "pass_probabilities", "shelter_heights", "vote_turns", "with_cad",
+    "hidden_heights", "majority_labels", "pass_probabilities", "shelter_heights", "vote_turns",
+    "with_cad",
 ]
 
 #: Format tag of detections.json.
