@@ -267,6 +267,32 @@ def test_constraint_values_are_the_features_of_the_best_assignment():
     assert len(got) == len(_constraint_paths(onto))
 
 
+def test_objects_are_measured_against_the_kind_of_their_class_that_fits():
+    """The built-in table and side table both match NYU40 tables and desks: a small top
+    calibrates the side table's rules, a long one the table's."""
+    from ontodetect.evaluation import best_kind
+    from ontodetect.evaluation._dataset import _class_id_lists, _class_ids
+    from ontodetect.ontology import builtin_ontology
+
+    onto = builtin_ontology()
+    lists = _class_id_lists(onto, reported_only=False, attr="name")
+    assert lists[7] == lists[14] == ["table", "side_table"] and lists[5] == ["chair"]
+    assert _class_ids(onto, reported_only=False, attr="name")[7] == "table"
+    assert _class_id_lists(onto, reported_only=True, attr="label")[7] == ["table"]
+
+    def top(length):
+        plane = _plane(1.0, 0.62, 0.61, 0.63, length, 0.5, 0.9 * length * 0.5, (0, 0, 0.62))
+        return ClusterDescription([plane], {}, length + 0.03, 0.53, 0.63, 0.0)
+
+    for length, kind in ((0.55, "side_table"), (1.4, "table")):
+        cls, score = best_kind(onto, ["table", "side_table"], top(length))
+        assert cls.name == kind and score.name == kind
+        assert score.log_likelihood == score_class(onto[kind], top(length)).log_likelihood
+    assert best_kind(onto, ["table"], top(0.55))[0].name == "table"
+    with pytest.raises(InvalidParameterError, match="names"):
+        best_kind(onto, [], top(0.55))
+
+
 # -- the nested check ----------------------------------------------------------------------
 def _chair_scene(name):
     return _chair_at(name, 0.46, back_top=1.0)

@@ -2,9 +2,11 @@
 
 For every ground-truth object of a class in the calibration scenes, the segmentation
 cluster that overlaps it most (point IoU, at least :data:`MIN_CLUSTER_IOU`) is scored
-against the class with :func:`~ontodetect.ontology.score_class`; the best assignment of
-its planes to the class's parts gives one measured value of every constraint of the
-class (part, relation and cluster features).
+against the class with :func:`~ontodetect.ontology.score_class` (where several classes
+match one ground truth, such as a table and a side table, against the one that explains
+the cluster best: :func:`best_kind`); the best assignment of its planes to the class's
+parts gives one measured value of every constraint of the class (part, relation and
+cluster features).
 
 Each Gaussian is then re-estimated as the posterior of a conjugate normal model whose
 prior is the ontology's own constraint, worth :data:`PRIOR_STRENGTH` objects
@@ -72,6 +74,7 @@ from ._dataset import (
     DatasetEvaluation,
     SceneSource,
     _check_detect_options,
+    _class_id_lists,
     _class_ids,
     _natural_key,
     discover_scenes,
@@ -90,6 +93,7 @@ __all__ = [
     "SceneSamples",
     "SceneSplit",
     "ValidationScene",
+    "best_kind",
     "calibrate_dataset",
     "calibrate_ontology",
     "collect_scene_samples",
@@ -367,6 +371,18 @@ class SceneSamples:
     scene: ValidationScene | None = None
 
 
+def best_kind(ontology: Any, names: Sequence[str], description: Any) -> tuple[Any, Any]:
+    """Of the classes ``names`` (kinds of one ground-truth class, such as a table and a side
+    table), the one whose likelihood on the cluster ``description`` is highest, with its
+    :class:`ontodetect.ontology.ClassScore`; the first of equals."""
+    from ..ontology import score_class
+
+    if not names:
+        raise InvalidParameterError("names", "at least one class name", names)
+    scored = [(ontology[n], score_class(ontology[n], description)) for n in names]
+    return max(scored, key=lambda t: t[1].log_likelihood)
+
+
 def collect_scene_samples(
     source: SceneSource,
     ontology: Any,
@@ -385,7 +401,9 @@ def collect_scene_samples(
         The classes whose constraints are measured.
     class_ids : mapping of int to str, optional
         Ground-truth class id -> ontology class name; from the classes' ``matches`` by
-        default (including classes that are not reported, such as stools).
+        default (including classes that are not reported, such as stools). Where several
+        classes match one ground truth (a table and a side table), each object is measured
+        against the one whose likelihood on its cluster is highest.
     segment_options : mapping, optional
         ``config``, ``seed``, ``up``, ``scale`` of :func:`ontodetect.segment.segment`.
     min_iou : float
@@ -395,12 +413,18 @@ def collect_scene_samples(
         (:class:`ValidationScene`) for the nested check of :func:`select_groups`.
     """
     from ..errors import OntoDetectError
-    from ..ontology import score_class
     from ..pipeline import describe_clusters
     from ..segment import segment
 
     opts = dict(segment_options or {})
     ids = _class_ids(ontology, reported_only=False, attr="name") if class_ids is None else class_ids
+    # Classes that match the same ground truth (a table and a side table) are kinds of it:
+    # each object is measured against the kind that explains its cluster best.
+    kinds: dict[str, list[str]] = {}
+    for names in _class_id_lists(ontology, reported_only=False, attr="name").values():
+        for name in names[1:]:
+            if name not in kinds.setdefault(names[0], [names[0]]):
+                kinds[names[0]].append(name)
     try:
         cloud = read_scene_cloud(source)
         gts = instances_from_labels(cloud.fields["instance"], cloud.fields["class_id"], ids)
@@ -427,11 +451,10 @@ def collect_scene_samples(
             skipped[gt.label] = skipped.get(gt.label, 0) + 1
             continue
         k = int(np.argmax(iou[:, g]))
-        cls = ontology[gt.label]
-        score = score_class(cls, descriptions[k])
+        cls, score = best_kind(ontology, kinds.get(gt.label, [gt.label]), descriptions[k])
         for path, v in constraint_values(cls, score).items():
             values.setdefault(path, []).append(v)
-        used[gt.label] = used.get(gt.label, 0) + 1
+        used[cls.name] = used.get(cls.name, 0) + 1
     scene = None
     if keep_clusters:
         # The same ground truth and point rows as evaluate_scene uses for detections.

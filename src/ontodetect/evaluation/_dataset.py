@@ -247,21 +247,30 @@ def discover_scenes(path: str | os.PathLike[str], format: str = "auto") -> list[
 
 
 # -- loading -------------------------------------------------------------------------------
-def _class_ids(ontology: Any, *, reported_only: bool, attr: str) -> dict[int, str]:
+def _class_id_lists(ontology: Any, *, reported_only: bool, attr: str) -> dict[int, list[str]]:
+    """Ground-truth class id -> every class (``attr`` of it) that matches it, in file order."""
     from ..io._labels import NYU40_NAMES
     from ..synth.scene import CLASS_IDS
 
     ids = {name: cid for name, cid in CLASS_IDS.items() if cid > 0}
     ids.update({name: cid for cid, name in NYU40_NAMES.items() if cid > 0})
-    out: dict[int, str] = {}
+    out: dict[int, list[str]] = {}
     for cls in ontology.classes:
         if reported_only and not cls.detect:
             continue
         for match in cls.matches:
             cid = ids.get(match.lower().replace("_", " "), ids.get(match.lower()))
             if cid is not None:
-                out.setdefault(cid, getattr(cls, attr))
+                names = out.setdefault(cid, [])
+                if getattr(cls, attr) not in names:
+                    names.append(getattr(cls, attr))
     return dict(sorted(out.items()))
+
+
+def _class_ids(ontology: Any, *, reported_only: bool, attr: str) -> dict[int, str]:
+    """Ground-truth class id -> the first class (``attr`` of it) that matches it."""
+    lists = _class_id_lists(ontology, reported_only=reported_only, attr=attr)
+    return {cid: names[0] for cid, names in lists.items()}
 
 
 def evaluation_classes(ontology: Any = None) -> dict[int, str]:
