@@ -422,9 +422,8 @@ def collect_scene_samples(
     # each object is measured against the kind that explains its cluster best.
     kinds: dict[str, list[str]] = {}
     for names in _class_id_lists(ontology, reported_only=False, attr="name").values():
-        for name in names[1:]:
-            if name not in kinds.setdefault(names[0], [names[0]]):
-                kinds[names[0]].append(name)
+        group = kinds.setdefault(names[0], [])
+        group.extend(n for n in names if n not in group)
     try:
         cloud = read_scene_cloud(source)
         gts = instances_from_labels(cloud.fields["instance"], cloud.fields["class_id"], ids)
