@@ -145,6 +145,30 @@ def test_ottoman_stands_on_the_floor_and_bench_seats_several():
     assert score_cluster(short, o).classes["bench"].likelihood < 0.1 * bench_likelihood
 
 
+def test_a_table_top_is_open_below_and_a_box_is_not():
+    """The floor seen under a top (``open_below``) keeps a table; a top under which it was
+    never seen (a cabinet, a bed) is no table top; not measured costs nothing."""
+    from ontodetect.ontology import part_values
+
+    o = builtin_ontology()
+    top = high_table()
+    assert np.isnan(part_values(top, "open_below")).all()
+    unknown = score_class(o["table"], top)
+    opened = score_class(o["table"], replace(top, open_below=[0.9]))
+    closed = score_class(o["table"], replace(top, open_below=[0.0]))
+    assert opened.log_likelihood == pytest.approx(unknown.log_likelihood)
+    # As the top the plane would cost exp(-6.1): it is likelier a missing top (0.02).
+    assert closed.log_likelihood < unknown.log_likelihood - 3.5
+    assert closed.assignment["top"] is None and unknown.assignment["top"] == 0
+    (cv,) = [c for c in unknown.constraints if c.feature == "open_below"]
+    assert cv.value is None and cv.factor == 1.0
+    half = score_class(o["table"], replace(top, open_below=[0.25]))  # one sigma short
+    (cv,) = [c for c in half.constraints if c.feature == "open_below"]
+    assert cv.value == 0.25 and cv.factor == pytest.approx(math.exp(-0.5))
+    assert score_cluster(replace(top, open_below=[0.0]), o).probabilities["table"] < 0.15
+    assert score_cluster(replace(top, open_below=[0.9]), o).probabilities["table"] > 0.5
+
+
 def test_label_probability_sums_the_classes_written_under_a_label():
     from ontodetect.labeling import label_probability
 

@@ -93,6 +93,40 @@ def test_shelter_is_the_highest_top_beside_a_cluster():
 
 
 # -- votes ---------------------------------------------------------------------------------
+def test_open_below_sees_the_floor_under_a_table_and_not_under_a_box(rng):
+    """The floor shows under a table on legs; under a closed box (a cabinet) it was never
+    seen. Only horizontal planes at least OPEN_BELOW_HEIGHT high are measured."""
+    from ontodetect.pipeline import OPEN_BELOW_HEIGHT, describe_clusters, open_below
+    from ontodetect.segment import segment
+    from test_segmentation import rect, slab, table
+
+    floor = rect(rng, (0, 0, 0), (5, 0, 0), (0, 3, 0), 0.03)
+    box = ((2.6, 0.6, 0.0), (3.6, 1.2, 0.75))
+    under_box = np.all((floor[:, :2] > box[0][:2]) & (floor[:, :2] < box[1][:2]), axis=1)
+    pts = np.vstack([floor[~under_box], table(rng, 0.5, 0.5),
+                     slab(rng, *box), slab(rng, (1.0, 2.0, 0.0), (1.9, 2.5, 0.4))])
+    seg = segment(pts, seed=0)
+    values = open_below(seg)
+    assert len(values) == len(seg)
+    tops = {}
+    for c, v in zip(seg, values, strict=True):
+        assert len(v) == len(c.planes)
+        for plane, share in zip(c.planes, v, strict=True):
+            if plane.tilt > 10 or plane.height < OPEN_BELOW_HEIGHT:
+                assert math.isnan(share)
+            else:
+                assert 0.0 <= share <= 1.0
+                tops[round(float(plane.centroid[0]))] = share
+    assert tops[1] > 0.8  # the table top, centred at x = 1.2
+    assert tops[3] < 0.1  # the box, centred at x = 3.1
+    assert len(tops) == 2  # the 0.4 m block is too low to be measured
+    descs = describe_clusters(seg)
+    assert [list(d.open_below) for d in descs] == [
+        pytest.approx(v, nan_ok=True) for v in values]
+    # From one view the top hides the floor under it: not measured.
+    assert all(d.open_below is None for d in describe_clusters(seg, viewpoint=(0, 0, 1.5)))
+
+
 def _rows(a, b):
     return np.arange(a, b, dtype=np.int64)
 

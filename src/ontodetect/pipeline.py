@@ -40,13 +40,14 @@ from .ontology import (
 )
 from .ontology._score import HORIZONTAL_TILT
 from .preprocess import Ground, find_ground, smooth_depth
+from .preprocess._structure import FLOOR
 from .render import box_corners
 from .segment import Cluster, Segmentation, segment
 
 __all__ = [
     "Detection", "Result", "class_for_label", "describe_cluster", "describe_clusters", "detect",
-    "hidden_heights", "majority_labels", "pass_probabilities", "shelter_heights", "vote_turns",
-    "with_cad",
+    "hidden_heights", "majority_labels", "open_below", "pass_probabilities", "shelter_heights",
+    "vote_turns", "with_cad",
 ]
 
 #: Format tag of detections.json.
@@ -203,11 +204,12 @@ def with_cad(result: Result, fits: Sequence[Any]) -> Result:
 
 
 def describe_cluster(cluster: Cluster, shelter: float = -math.inf,
-                     ceiling: float = math.inf, hidden_below: float = -math.inf
-                     ) -> ClusterDescription:
+                     ceiling: float = math.inf, hidden_below: float = -math.inf,
+                     open_below: Sequence[float] | None = None) -> ClusterDescription:
     """What the ontology scoring needs to know about a cluster (``shelter``: see
     :func:`shelter_heights`; ``ceiling``: the top of the search volume;
-    ``hidden_below``: see :func:`hidden_heights`)."""
+    ``hidden_below``: see :func:`hidden_heights`; ``open_below``: see
+    :func:`open_below`)."""
     return ClusterDescription(
         planes=cluster.planes,
         relations=cluster.relations_by_pair,
@@ -218,6 +220,7 @@ def describe_cluster(cluster: Cluster, shelter: float = -math.inf,
         shelter=shelter,
         ceiling=ceiling,
         hidden_below=hidden_below,
+        open_below=open_below,
     )
 
 
@@ -228,7 +231,8 @@ def describe_clusters(seg: Segmentation, viewpoint: Sequence[float] | None = Non
 
     ``viewpoint`` is the sensor's position in the input frame when the scan is one view
     (:func:`ontodetect.cloud.sensor_position`); then a cluster may also hide what
-    stands behind it (:func:`hidden_heights`).
+    stands behind it (:func:`hidden_heights`), and whether the floor shows under a top
+    (:func:`open_below`) is not measured, since the top itself hides most of it.
     """
     ceiling = float(seg.config.prepare.altitude_cutoff)
     hidden = np.full(len(seg), -math.inf)
@@ -237,8 +241,62 @@ def describe_clusters(seg: Segmentation, viewpoint: Sequence[float] | None = Non
         hidden = hidden_heights(np.array([c.height for c in seg], dtype=np.float64),
                                 np.array([c.box.center[:2] for c in seg], dtype=np.float64),
                                 eye)
-    return [describe_cluster(c, float(h), ceiling, float(b))
-            for c, h, b in zip(seg, shelter_heights(seg), hidden)]
+    # From one view the floor under a top is hidden by the top itself: not measured there.
+    below = open_below(seg) if viewpoint is None else [None] * len(seg)
+    return [describe_cluster(c, float(h), ceiling, float(b), o)
+            for c, h, b, o in zip(seg, shelter_heights(seg), hidden, below)]
+
+
+#: Cell of the horizontal grid on which :func:`open_below` compares a plane's footprint
+#: with the floor seen (m).
+FLOOR_CELL = 0.1
+#: Under a lower plane (m above the floor) the floor is seldom seen from eye height, so
+#: :func:`open_below` does not measure it: a coffee table looks closed below.
+OPEN_BELOW_HEIGHT = 0.55
+#: Rings of cells left out at the rim of a footprint, where the floor beyond the edge
+#: and the foot of the sides show (fewer when nothing would be left).
+OPEN_BELOW_RIM = 2
+
+
+def _cell_keys(xy: NDArray[np.float64]) -> NDArray[np.int64]:
+    """One integer per ``FLOOR_CELL`` cell of the points ``xy``."""
+    ij = np.floor(xy / FLOOR_CELL).astype(np.int64)
+    return (ij[:, 0] << 32) + (ij[:, 1] + (1 << 31))  # a step in j is a step of 1
+
+
+def open_below(seg: Segmentation) -> list[list[float]]:
+    """Per cluster and plane, the share of a horizontal plane's footprint under which the
+    floor was seen (0..1); NaN for the other planes, and for all when no floor was found.
+
+    A top on legs or a pedestal leaves the floor under it open to the sensor; a cabinet,
+    a bed, a box or an upholstered seat hides it. The footprint is the plane's cells on a
+    ``FLOOR_CELL`` grid less ``OPEN_BELOW_RIM`` rings of cells at its rim (where the
+    floor beyond the edge and the foot of a box's sides show), fewer when nothing would
+    be left; the floor is the voxels the preparation labelled floor.
+    """
+    prep = seg.prepared
+    floor = prep.voxels.centers[prep.structure_label == FLOOR]
+    out: list[list[float]] = []
+    if not prep.floor_found or not len(floor):
+        return [[math.nan] * len(c.planes) for c in seg]
+    seen = np.unique(_cell_keys(floor[:, :2]))
+    for c in seg:
+        values = []
+        for plane in c.planes:
+            if float(plane.tilt) > HORIZONTAL_TILT or float(plane.height) < OPEN_BELOW_HEIGHT:
+                values.append(math.nan)
+                continue
+            use = np.unique(_cell_keys(np.asarray(c.centers)[plane.inliers, :2]))
+            for _ in range(OPEN_BELOW_RIM):
+                inner = use
+                for step in ((1 << 32), -(1 << 32), 1, -1):
+                    inner = inner[np.isin(inner + step, use)]
+                if not len(inner):
+                    break
+                use = inner
+            values.append(float(np.isin(use, seen).mean()))
+        out.append(values)
+    return out
 
 
 #: What a cluster hides behind it must lie in its shadow for at least this far (m),

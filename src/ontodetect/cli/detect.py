@@ -120,7 +120,8 @@ def _print_explain(result) -> None:
         for col in ("part", "feature", "factor group", "value", "rule", "probability"):
             cons.add_column(col)
         for v in best["constraints"]:
-            value = "missing" if v["value"] is None else f"{v['value']:.3g}"
+            value = f"{v['value']:.3g}" if v["value"] is not None else (
+                "missing" if v["feature"] == "missing" else "not measured")
             cons.add_row(v["part"], v["feature"], v["group"], value, v["rule"],
                          f"{v['factor']:.3g}")
         console.print(cons)

@@ -58,6 +58,10 @@ PART_FEATURES: dict[str, str] = {
     "fill": "De",  # covered area / (length × width): how solid the patch is
     "density": "De",  # points per m² (depends on the sensor)
     "points": "De",  # inlier count (depends on the sensor)
+    # Share of the plane's footprint under which the floor was seen (0..1): open below
+    # (a top on legs) or closed (a cabinet, a bed, a box hide the floor under them).
+    # Measured by detect for horizontal planes; unknown elsewhere, which costs nothing.
+    "open_below": "Pr",
 }
 #: Features of a pair of parts ``between: [a, b]``.
 RELATION_FEATURES: dict[str, str] = {

@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy.special import logsumexp
 
 from ._gaussian import Gaussian
@@ -43,6 +44,7 @@ __all__ = [
     "ConstraintValue",
     "continuations",
     "missing_factor",
+    "part_values",
     "plane_feature",
     "score_class",
     "score_cluster",
@@ -113,6 +115,10 @@ class ClusterDescription:
         In a single view, the height above the floor under which the cluster itself
         hides from the sensor what stands behind it (a seat behind its backrest, seen
         from behind and above); ``-inf`` when unknown (a scan fused from many views).
+    open_below : sequence of float, optional
+        Per plane, the share of its footprint under which the floor was seen (the part
+        feature ``open_below``); NaN where it was not measured, ``None`` when nothing
+        was (then the feature costs nothing).
     """
 
     planes: Sequence[Any]
@@ -124,6 +130,7 @@ class ClusterDescription:
     shelter: float = -math.inf
     ceiling: float = math.inf
     hidden_below: float = -math.inf
+    open_below: Sequence[float] | None = None
 
     @property
     def cut(self) -> bool:
@@ -149,7 +156,7 @@ class ConstraintValue:
     part: str  # part name, "a~b" for a relation, "cluster" for cluster rules
     feature: str
     group: str  # Or, He, De, Pr, or "cluster"
-    value: float | None  # None when the part is missing
+    value: float | None  # None when the part is missing or the feature was not measured
     gaussian: Gaussian | None
     factor: float
 
@@ -185,8 +192,19 @@ class ClusterScores:
         return self.probabilities[self.best]
 
 
+def part_values(desc: ClusterDescription, feature: str) -> NDArray[np.float64]:
+    """(planes,) the value of a part feature for every plane of the cluster; NaN where it
+    was not measured (``open_below`` outside :func:`ontodetect.pipeline.describe_clusters`)."""
+    if feature == "open_below":
+        if desc.open_below is None:
+            return np.full(len(desc.planes), np.nan)
+        return np.asarray(desc.open_below, dtype=np.float64)
+    return np.array([plane_feature(pl, feature) for pl in desc.planes], dtype=np.float64)
+
+
 def plane_feature(plane: Any, feature: str) -> float:
-    """The value of a part feature (see ``PART_FEATURES``) for one plane."""
+    """The value of a part feature (see ``PART_FEATURES``) for one plane (not
+    ``open_below``, which depends on the scene: :func:`part_values`)."""
     if feature == "top":
         return float(plane.z_max)
     if feature == "bottom":
@@ -250,8 +268,10 @@ def _unary(cls: ObjectClass, desc: ClusterDescription) -> np.ndarray:
     out = np.zeros((len(cls.parts), len(desc.planes)))
     for p, part in enumerate(cls.parts):
         for feature, g in part.constraints.items():
-            values = np.array([plane_feature(pl, feature) for pl in desc.planes])
-            out[p] += g.log(values) if len(values) else 0.0
+            values = part_values(desc, feature)
+            if len(values):
+                known = ~np.isnan(values)  # a feature not measured costs nothing
+                out[p, known] += g.log(values[known])
     return out
 
 
@@ -363,7 +383,11 @@ def score_class(cls: ObjectClass, desc: ClusterDescription, log_prior: float = 0
                                                missing[p]))
         else:
             for feature, g in part.constraints.items():
-                value = plane_feature(desc.planes[plane], feature)
+                value = float(part_values(desc, feature)[plane])
+                if math.isnan(value):  # not measured: no factor
+                    constraints.append(ConstraintValue(part.name, feature,
+                                                       PART_FEATURES[feature], None, g, 1.0))
+                    continue
                 f = float(g(value))
                 groups[PART_FEATURES[feature]] *= f
                 constraints.append(ConstraintValue(part.name, feature, PART_FEATURES[feature],
