@@ -149,6 +149,7 @@ ABS_SIGMA_FLOOR: dict[str, float] = {
     "breadth": 0.03,
     "area": 0.01,
     "fill": 0.03,
+    "open_below": 0.03,
     "overlap": 0.03,
     "rise": 0.02,
     "planes": 0.5,
