@@ -266,7 +266,8 @@ def _cell_keys(xy: NDArray[np.float64]) -> NDArray[np.int64]:
 
 def open_below(seg: Segmentation) -> list[list[float]]:
     """Per cluster and plane, the share of a horizontal plane's footprint under which the
-    floor was seen (0..1); NaN for the other planes, and for all when no floor was found.
+    floor was seen (0..1); NaN for tilted planes and planes lower than
+    ``OPEN_BELOW_HEIGHT``, and for all when no floor was found.
 
     A top on legs or a pedestal leaves the floor under it open to the sensor; a cabinet,
     a bed, a box or an upholstered seat hides it. The footprint is the plane's cells on a
