@@ -283,11 +283,12 @@ def open_below(seg: Segmentation) -> list[list[float]]:
     seen = np.unique(_cell_keys(floor[:, :2]))
     for c in seg:
         values = []
+        centers = np.asarray(c.centers)
         for plane in c.planes:
             if float(plane.tilt) > HORIZONTAL_TILT or float(plane.height) < OPEN_BELOW_HEIGHT:
                 values.append(math.nan)
                 continue
-            use = np.unique(_cell_keys(np.asarray(c.centers)[plane.inliers, :2]))
+            use = np.unique(_cell_keys(centers[plane.inliers, :2]))
             for _ in range(OPEN_BELOW_RIM):
                 inner = use
                 for step in ((1 << 32), -(1 << 32), 1, -1):

@@ -129,7 +129,13 @@ def label_costs(
     share a label are kinds of one object, so a side table does not lose the cluster to a
     chair because the cluster's table-ness is split between "table" and "side_table".
     """
-    by_label = label_probabilities(scores.probabilities, ontology)
+    return _costs(label_probabilities(scores.probabilities, ontology), planes, ontology,
+                  beta, gamma)
+
+
+def _costs(by_label: Mapping[str, float], planes: Sequence[Any], ontology: Ontology,
+           beta: float, gamma: float) -> dict[str, float]:
+    """:func:`label_costs` from the cluster's :func:`label_probabilities`."""
     return {
         cls.name: energy(by_label[cls.label], label_fit(planes, cls.labeling),
                          beta=beta, gamma=gamma)
@@ -194,13 +200,13 @@ def label_clusters(
         raise InvalidParameterError("context", "a number >= 0", context)
     gamma = 1.0 - beta
     n = len(scores)
-    costs = [label_costs(s, pl, ontology, beta=beta, gamma=gamma) for s, pl in zip(scores, planes)]
+    labels = [label_probabilities(s.probabilities, ontology) for s in scores]
+    costs = [_costs(by, pl, ontology, beta, gamma) for by, pl in zip(labels, planes)]
     options: list[list[str | None]] = []
     nothing: list[bool] = []
-    for s, c in zip(scores, costs):
+    for s, c, by_label in zip(scores, costs, labels):
         # Algorithm 1: the cluster is kept when its best label passes the threshold; and a
         # cluster that "none of the classes" explains better than any label is not an object.
-        by_label = label_probabilities(s.probabilities, ontology)
         nothing.append(s.probabilities.get(NONE, 0.0) > max(by_label.values(), default=0.0))
         if nothing[-1]:
             options.append([None])

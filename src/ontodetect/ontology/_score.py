@@ -195,11 +195,15 @@ class ClusterScores:
 def part_values(desc: ClusterDescription, feature: str) -> NDArray[np.float64]:
     """(planes,) the value of a part feature for every plane of the cluster; NaN where it
     was not measured (``open_below`` outside :func:`ontodetect.pipeline.describe_clusters`)."""
+    return np.array([_part_value(desc, i, feature) for i in range(len(desc.planes))],
+                    dtype=np.float64)
+
+
+def _part_value(desc: ClusterDescription, i: int, feature: str) -> float:
+    """:func:`part_values` of plane ``i`` alone."""
     if feature == "open_below":
-        if desc.open_below is None:
-            return np.full(len(desc.planes), np.nan)
-        return np.asarray(desc.open_below, dtype=np.float64)
-    return np.array([plane_feature(pl, feature) for pl in desc.planes], dtype=np.float64)
+        return math.nan if desc.open_below is None else float(desc.open_below[i])
+    return plane_feature(desc.planes[i], feature)
 
 
 def plane_feature(plane: Any, feature: str) -> float:
@@ -383,7 +387,7 @@ def score_class(cls: ObjectClass, desc: ClusterDescription, log_prior: float = 0
                                                missing[p]))
         else:
             for feature, g in part.constraints.items():
-                value = float(part_values(desc, feature)[plane])
+                value = _part_value(desc, plane, feature)
                 if math.isnan(value):  # not measured: no factor
                     constraints.append(ConstraintValue(part.name, feature,
                                                        PART_FEATURES[feature], None, g, 1.0))
