@@ -48,14 +48,17 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("dataset", type=Path, help="folder of *_vert.npy scenes")
     parser.add_argument("--repeat", type=int, default=3)
-    parser.add_argument("--votes", type=int, default=None,
-                        help="passes per detection (default: detect.votes, 3)")
+    parser.add_argument(
+        "--votes", type=int, default=None, help="passes per detection (default: detect.votes, 3)"
+    )
     args = parser.parse_args(argv)
     scenes = sorted(args.dataset.glob("*_vert.npy"))
     if not scenes:
         raise SystemExit(f"{args.dataset}: no *_vert.npy scenes")
-    print(f"machine: {platform.processor() or platform.machine()}, "
-          f"python {platform.python_version()}, votes {args.votes}")
+    print(
+        f"machine: {platform.processor() or platform.machine()}, "
+        f"python {platform.python_version()}, votes {args.votes}"
+    )
     print("| scene | points | detections | ontodetect detect (s) | Open3D recipe (s) | ratio |")
     print("|---|---:|---:|---:|---:|---:|")
     ours, theirs = [], []
@@ -67,11 +70,15 @@ def main(argv: list[str] | None = None) -> None:
         ours.append(t_ours)
         theirs.append(t_o3d)
         name = path.name.removesuffix("_vert.npy")
-        print(f"| {name} | {len(cloud):,} | {len(result.detections)} | {t_ours:.2f} | "
-              f"{t_o3d:.2f} | {t_o3d / t_ours:.1f}x |")
-    print(f"| **median** | | | **{statistics.median(ours):.2f}** | "
-          f"**{statistics.median(theirs):.2f}** | "
-          f"**{statistics.median(theirs) / statistics.median(ours):.1f}x** |")
+        print(
+            f"| {name} | {len(cloud):,} | {len(result.detections)} | {t_ours:.2f} | "
+            f"{t_o3d:.2f} | {t_o3d / t_ours:.1f}x |"
+        )
+    print(
+        f"| **median** | | | **{statistics.median(ours):.2f}** | "
+        f"**{statistics.median(theirs):.2f}** | "
+        f"**{statistics.median(theirs) / statistics.median(ours):.1f}x** |"
+    )
 
 
 if __name__ == "__main__":

@@ -64,22 +64,26 @@ def test_detect_writes_the_contract(scene, tmp_path, capsys):
 
 
 def test_detect_explain_prints_constraints(scene, tmp_path, capsys):
-    code = main(["detect", str(scene / "cloud.ply"), "-o", str(tmp_path), "--explain",
-                 "--no-picture"])
+    code = main(
+        ["detect", str(scene / "cloud.ply"), "-o", str(tmp_path), "--explain", "--no-picture"]
+    )
     assert code == 0
     text = capsys.readouterr().out
     assert "P_obj|ont" in text and "cost U" in text and "seat" in text
     assert not (tmp_path / "detections.png").exists()
 
 
-@pytest.mark.parametrize(("args", "message"), [
-    (["--room", "spaceship"], "'room'"),
-    (["--set", "cluster.radius=-1"], "cluster.radius"),
-    (["--threshold", "2"], "'threshold'"),
-    (["--votes", "0"], "'detect.votes'"),
-    (["--viewpoint", "1,2"], "'--viewpoint'"),
-    (["--viewpoint", "1,up,2"], "'--viewpoint'"),
-])
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--room", "spaceship"], "'room'"),
+        (["--set", "cluster.radius=-1"], "cluster.radius"),
+        (["--threshold", "2"], "'threshold'"),
+        (["--votes", "0"], "'detect.votes'"),
+        (["--viewpoint", "1,2"], "'--viewpoint'"),
+        (["--viewpoint", "1,up,2"], "'--viewpoint'"),
+    ],
+)
 def test_detect_bad_parameters_exit_2_with_one_line(scene, tmp_path, capsys, args, message):
     code = main(["detect", str(scene / "cloud.ply"), "-o", str(tmp_path / "o"), *args])
     assert code == 2
@@ -95,8 +99,10 @@ def test_detect_missing_input(tmp_path, capsys):
 
 def test_detect_with_cad_adds_poses_and_the_object_map(scene, tmp_path):
     out = tmp_path / "cad"
-    assert main(["-q", "detect", str(scene / "cloud.ply"), "-o", str(out), "--cad",
-                 "--no-picture"]) == 0
+    assert (
+        main(["-q", "detect", str(scene / "cloud.ply"), "-o", str(out), "--cad", "--no-picture"])
+        == 0
+    )
     doc = json.loads((out / "detections.json").read_text())
     assert doc["detections"]
     for d in doc["detections"]:

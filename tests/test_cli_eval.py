@@ -53,7 +53,10 @@ def test_eval_turns_each_scene_and_reports_every_turn_and_the_pool(dataset, tmp_
     assert "2 scenes, 4 runs" in printed and "90°: chair P" in printed
     doc = json.loads((out / "report.json").read_text(encoding="utf-8"))
     assert [s["scene"] for s in doc["scenes"]] == [
-        "scene_0000@0deg", "scene_0000@90deg", "scene_0001@0deg", "scene_0001@90deg"
+        "scene_0000@0deg",
+        "scene_0000@90deg",
+        "scene_0001@0deg",
+        "scene_0001@90deg",
     ]
     assert doc["options"]["turns"] == [0.0, 90.0]
     pooled = doc["evaluations"]["iou@0.25"]["per_class"]["chair"]

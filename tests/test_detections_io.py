@@ -7,12 +7,24 @@ from ontodetect.io._detections import read_detections, write_detections
 
 
 def doc(**over):
-    d = {"format": "ontodetect.detections/1", "source": "scan.ply", "num_points": 100,
-         "frame": {"up": [0, 0, 1], "ground_z": 0.0, "scale": 1.0},
-         "detections": [{"id": 1, "label": "chair", "score": 0.6,
-                         "probabilities": {"chair": 0.6}, "costs": {"chair": 0.4},
-                         "box": {"center": [1, 2, 0.4], "size": [0.5, 0.5, 0.9], "yaw": 0.3},
-                         "point_indices": list(range(10, 30)), "parts": []}]}
+    d = {
+        "format": "ontodetect.detections/1",
+        "source": "scan.ply",
+        "num_points": 100,
+        "frame": {"up": [0, 0, 1], "ground_z": 0.0, "scale": 1.0},
+        "detections": [
+            {
+                "id": 1,
+                "label": "chair",
+                "score": 0.6,
+                "probabilities": {"chair": 0.6},
+                "costs": {"chair": 0.4},
+                "box": {"center": [1, 2, 0.4], "size": [0.5, 0.5, 0.9], "yaw": 0.3},
+                "point_indices": list(range(10, 30)),
+                "parts": [],
+            }
+        ],
+    }
     d.update(over)
     return d
 
@@ -24,11 +36,14 @@ def test_round_trip_and_compact_indices(tmp_path):
     assert read_detections(tmp_path) == json.loads(text)
 
 
-@pytest.mark.parametrize(("change", "where"), [
-    ({"format": "x"}, "format"),
-    ({"num_points": -1}, "num_points"),
-    ({"frame": {}}, "frame"),
-])
+@pytest.mark.parametrize(
+    ("change", "where"),
+    [
+        ({"format": "x"}, "format"),
+        ({"num_points": -1}, "num_points"),
+        ({"frame": {}}, "frame"),
+    ],
+)
 def test_contract_violations_name_the_key(tmp_path, change, where):
     with pytest.raises(CorruptFileError, match=where):
         write_detections(tmp_path / "d.json", doc(**change))

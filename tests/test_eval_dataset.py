@@ -329,8 +329,10 @@ def test_runs_per_turn_and_seed_are_named_pooled_and_reported_per_turn(tmp_path)
     root = make_votenet(tmp_path / "dev", ("scene0000_00", "scene0001_00"))
     ev = evaluate_dataset(root, turns=[0, 90], seeds=[0, 1], detect_options={"votes": 1})
     assert [s.name for s in ev.scenes[:4]] == [
-        "scene0000_00@0deg-seed0", "scene0000_00@0deg-seed1",
-        "scene0000_00@90deg-seed0", "scene0000_00@90deg-seed1",
+        "scene0000_00@0deg-seed0",
+        "scene0000_00@0deg-seed1",
+        "scene0000_00@90deg-seed0",
+        "scene0000_00@90deg-seed1",
     ]
     assert [(s.turn, s.seed) for s in ev.scenes[:2]] == [(0.0, 0), (0.0, 1)]
     assert list(ev.by_variant) == ["0°", "90°"]
@@ -345,11 +347,13 @@ def test_runs_per_turn_and_seed_are_named_pooled_and_reported_per_turn(tmp_path)
     rows = markdown_report(ev).split("## Per scene")[1].split("\n## ")[0]
     scene_rows = [line for line in rows.splitlines() if line.startswith("| scene0")]
     assert [line.split(" | ")[:2] for line in scene_rows] == [
-        ["| scene0000_00", "4"], ["| scene0001_00", "4"],
+        ["| scene0000_00", "4"],
+        ["| scene0001_00", "4"],
     ]
     # one chair and one table per run: 4 of each over the runs of a scene
-    assert all(line.split(" | ")[4] == "4/0/0" and line.endswith("| 4/0/0 |")
-               for line in scene_rows)
+    assert all(
+        line.split(" | ")[4] == "4/0/0" and line.endswith("| 4/0/0 |") for line in scene_rows
+    )
     assert len(doc["scenes"]) == 8
 
     seeded = evaluate_dataset(root, seeds=[3, 4], detect_options={"votes": 1})

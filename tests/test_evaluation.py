@@ -50,8 +50,12 @@ def test_class_mismatch_is_not_a_match_but_shows_in_the_confusion():
 
 def test_metrics_against_hand_computation():
     gts = [inst(1, "chair", 0, 100), inst(2, "chair", 100, 200), inst(3, "table", 200, 400)]
-    preds = [inst(1, "chair", 0, 80, 0.9), inst(2, "chair", 300, 320, 0.8),
-             inst(3, "chair", 100, 190, 0.7), inst(4, "table", 200, 400, 0.6)]
+    preds = [
+        inst(1, "chair", 0, 80, 0.9),
+        inst(2, "chair", 300, 320, 0.8),
+        inst(3, "chair", 100, 190, 0.7),
+        inst(4, "table", 200, 400, 0.6),
+    ]
     ev = evaluate_scenes([SceneResult("s", preds, gts)])
     chair = ev.per_class["chair"]
     assert (chair.tp, chair.fp, chair.fn) == (2, 1, 0)
@@ -71,9 +75,11 @@ def test_average_precision_edge_cases():
 
 
 def test_distance_criterion_of_gunther():
-    gt = [inst(1, "chair", 0, 10, center=[0, 0, 0.4]), inst(2, "table", 10, 20, center=[2, 0, .7])]
-    det = [inst(1, "chair", 50, 60, 0.9, center=[0.1, 0.1, 0.5]),
-           inst(2, "table", 60, 70, 0.9, center=[2.5, 0, 0.7])]
+    gt = [inst(1, "chair", 0, 10, center=[0, 0, 0.4]), inst(2, "table", 10, 20, center=[2, 0, 0.7])]
+    det = [
+        inst(1, "chair", 50, 60, 0.9, center=[0.1, 0.1, 0.5]),
+        inst(2, "table", 60, 70, 0.9, center=[2.5, 0, 0.7]),
+    ]
     m = match_instances(det, gt, criterion="distance")
     assert m.pred_match.tolist() == [0, -1]  # 14 cm chair ok, 50 cm table too far
     with pytest.raises(InvalidParameterError, match="criterion"):
@@ -86,5 +92,7 @@ def test_instances_from_labels_maps_nyu40_and_file_rows():
     xyz = np.arange(24, dtype=float).reshape(8, 3)
     got = instances_from_labels(inst_ids, cls, NYU40_CLASSES, xyz=xyz, index=np.arange(8) + 10)
     assert [(g.id, g.label, g.points.tolist()) for g in got] == [
-        (1, "chair", [11, 12]), (2, "table", [13, 14, 15])]
+        (1, "chair", [11, 12]),
+        (2, "table", [13, 14, 15]),
+    ]
     assert got[0].center.tolist() == pytest.approx([4.5, 5.5, 6.5])

@@ -53,8 +53,8 @@ def test_costs_prefer_table_for_a_large_top():
 def test_threshold_and_not_reported_classes():
     o = builtin_ontology()
     out = label_clusters(
-        [scores(chair=0.1), scores(chair=0.7), scores(stool=0.8)],
-        [[plane(0.4, 0.4)]] * 3, o)
+        [scores(chair=0.1), scores(chair=0.7), scores(stool=0.8)], [[plane(0.4, 0.4)]] * 3, o
+    )
     assert out[0].label is None and out[0].reason == "none of the classes"
     assert out[1].label == "chair"
     assert out[2].label is None and "stool" in out[2].reason
@@ -73,20 +73,40 @@ def test_classes_sharing_a_label_are_weighed_together():
     (choice,) = label_clusters([s], [top], o)
     assert choice.label == "table" and choice.extra["class"] == "side_table"
     # Neither class alone passes the threshold, nor beats "none"; the label does both.
-    probs = {"table": 0.12, "side_table": 0.1, "chair": 0.14, "sofa": 0.14, "stool": 0.14,
-             "bench": 0.14, "cabinet": 0.08, "none": 0.14}
+    probs = {
+        "table": 0.12,
+        "side_table": 0.1,
+        "chair": 0.14,
+        "sofa": 0.14,
+        "stool": 0.14,
+        "bench": 0.14,
+        "cabinet": 0.08,
+        "none": 0.14,
+    }
     split = ClusterScores(classes={}, probabilities=probs, best="chair")
     (choice,) = label_clusters([split], [top], o, threshold=0.15)
     assert choice.label == "table"
 
 
-CLASSES = ("chair", "sofa", "table", "side_table", "stool", "ottoman", "bench", "cabinet",
-           "bed", "none")
+CLASSES = (
+    "chair",
+    "sofa",
+    "table",
+    "side_table",
+    "stool",
+    "ottoman",
+    "bench",
+    "cabinet",
+    "bed",
+    "none",
+)
 
 
 @settings(max_examples=200, deadline=None)
-@given(weights=st.lists(st.floats(0.0, 1.0), min_size=len(CLASSES), max_size=len(CLASSES)),
-       threshold=st.floats(0.05, 0.5))
+@given(
+    weights=st.lists(st.floats(0.0, 1.0), min_size=len(CLASSES), max_size=len(CLASSES)),
+    threshold=st.floats(0.05, 0.5),
+)
 def test_a_label_is_chosen_only_when_its_probability_earns_it(weights, threshold):
     """Whatever the probabilities: the chosen class's label reaches the threshold and beats
     "none"; nothing is chosen when "none" beats every label or no label reaches the
@@ -132,8 +152,10 @@ def test_context_tips_an_ambiguous_seat_towards_chair_near_a_table():
     assert helped[1].label == "table"
 
 
-@pytest.mark.parametrize(("kwargs", "name"), [
-    ({"beta": 1.5}, "beta"), ({"threshold": -0.1}, "threshold"), ({"context": -1}, "context")])
+@pytest.mark.parametrize(
+    ("kwargs", "name"),
+    [({"beta": 1.5}, "beta"), ({"threshold": -0.1}, "threshold"), ({"context": -1}, "context")],
+)
 def test_bad_parameters(kwargs, name):
     with pytest.raises(InvalidParameterError, match=f"'{name}'"):
         label_clusters([scores(chair=0.5)], [[plane(0.4, 0.4)]], builtin_ontology(), **kwargs)

@@ -64,8 +64,14 @@ class R:
 
 def cluster(planes, relations=None, *, length, breadth=None, height=None):
     top = max(p.z_max for p in planes)
-    return ClusterDescription(planes=planes, relations=relations or {}, length=length,
-                              breadth=breadth or length * 0.9, height=height or top, bottom=0.0)
+    return ClusterDescription(
+        planes=planes,
+        relations=relations or {},
+        length=length,
+        breadth=breadth or length * 0.9,
+        height=height or top,
+        bottom=0.0,
+    )
 
 
 def chair():
@@ -100,9 +106,18 @@ def sofa():
     return cluster([seat, back], {(0, 1): R(angle=78, distance=0.05)}, length=2.1, breadth=0.9)
 
 
-@pytest.mark.parametrize(("make", "expected"), [
-    (chair, "chair"), (stool, "stool"), (high_table, "table"), (sofa, "sofa"),
-    (side_table, "side_table"), (ottoman, "ottoman"), (bench, "bench")])
+@pytest.mark.parametrize(
+    ("make", "expected"),
+    [
+        (chair, "chair"),
+        (stool, "stool"),
+        (high_table, "table"),
+        (sofa, "sofa"),
+        (side_table, "side_table"),
+        (ottoman, "ottoman"),
+        (bench, "bench"),
+    ],
+)
 def test_hand_made_clusters_get_their_class(make, expected):
     scores = score_cluster(make(), builtin_ontology())
     assert scores.best == expected
@@ -124,8 +139,7 @@ def test_small_tops_by_height_and_size():
     assert not o["ottoman"].detect and not o["stool"].detect
     for make in (side_table, stool, ottoman):
         assert score_cluster(make(), o).probabilities["chair"] < 0.15
-    lower = score_cluster(cluster([P(tilt=1, height=0.45, length=0.55, width=0.5)],
-                                  length=0.58), o)
+    lower = score_cluster(cluster([P(tilt=1, height=0.45, length=0.55, width=0.5)], length=0.58), o)
     assert lower.probabilities["side_table"] < 0.1  # below a side table's height
 
 
@@ -199,29 +213,44 @@ def test_height_cut_at_the_search_volume_counts_as_at_least_that_tall():
     # or a shelf cut at 1.4 m, whose true top is higher; chairs are never that tall.
     o = builtin_ontology()
     seen = chair()
-    tall = ClusterDescription(planes=seen.planes, relations=seen.relations, length=0.55,
-                              breadth=0.5, height=1.38, bottom=0.0)
-    cut = ClusterDescription(planes=seen.planes, relations=seen.relations, length=0.55,
-                             breadth=0.5, height=1.38, bottom=0.0, ceiling=1.4)
+    tall = ClusterDescription(
+        planes=seen.planes,
+        relations=seen.relations,
+        length=0.55,
+        breadth=0.5,
+        height=1.38,
+        bottom=0.0,
+    )
+    cut = ClusterDescription(
+        planes=seen.planes,
+        relations=seen.relations,
+        length=0.55,
+        breadth=0.5,
+        height=1.38,
+        bottom=0.0,
+        ceiling=1.4,
+    )
     assert not tall.cut and cut.cut and not chair().cut
     g = o["chair"].cluster.constraints["height"]
-    factor = {c.feature: c.factor for c in score_class(o["chair"], cut).constraints
-              if c.part == "cluster"}["height"]
+    factor = {
+        c.feature: c.factor for c in score_class(o["chair"], cut).constraints if c.part == "cluster"
+    }["height"]
     assert factor == pytest.approx(np.mean(g(np.linspace(1.38, 1.98, 13))))
     assert factor < 0.3 < g(1.38)
     gap = score_class(o["chair"], tall).log_likelihood - score_class(o["chair"], cut).log_likelihood
     assert gap == pytest.approx(math.log(g(1.38) / factor))
-    assert score_cluster(cut, o).probabilities["chair"] < score_cluster(tall, o).probabilities[
-        "chair"]
+    assert (
+        score_cluster(cut, o).probabilities["chair"] < score_cluster(tall, o).probabilities["chair"]
+    )
     # A class that may be taller than what is seen keeps its factor.
     table = o["table"].cluster.constraints["height"]
     assert cluster_log_factor(table, cut, "height") == pytest.approx(
-        math.log(np.mean(table(np.linspace(1.38, 1.98, 13)))))
+        math.log(np.mean(table(np.linspace(1.38, 1.98, 13))))
+    )
 
 
 def test_occluded_backrest_is_penalised_not_fatal():
-    seat_only = cluster([P(tilt=2, height=0.46, length=0.45, width=0.42)], length=0.5,
-                        height=0.95)
+    seat_only = cluster([P(tilt=2, height=0.46, length=0.45, width=0.42)], length=0.5, height=0.95)
     s = score_class(builtin_ontology()["chair"], seat_only)
     assert s.assignment["backrest"] is None
     assert s.factors["backrest"]["missing"] == pytest.approx(0.12)
@@ -232,8 +261,11 @@ def test_pieces_of_one_top_are_explained_together():
     o = builtin_ontology()
     whole = high_table()
     half = P(tilt=1, height=0.74, length=0.7, width=0.8)
-    split = cluster([half, P(tilt=1, height=0.75, length=0.7, width=0.8, cx=0.7)],
-                    {(0, 1): R(angle=0.5, distance=0.01)}, length=1.45)
+    split = cluster(
+        [half, P(tilt=1, height=0.75, length=0.7, width=0.8, cx=0.7)],
+        {(0, 1): R(angle=0.5, distance=0.01)},
+        length=1.45,
+    )
     assert continuations(split) == [frozenset({1}), frozenset({0})]
     # A step in height or a gap between them: two surfaces.
     apart = cluster(split.planes, {(0, 1): R(angle=0.5, distance=0.3)}, length=1.45)
@@ -259,10 +291,12 @@ def test_pieces_of_one_backrest_are_explained_together():
     right = Leaning(tilt=75, height=0.8, length=0.22, width=0.4, cx=0.12, cy=0.2)
     behind = Leaning(tilt=75, height=0.8, length=0.22, width=0.4, cx=0.12, cy=0.35)
     rel = R(angle=87, distance=0.02)
-    one = cluster([seat, left, right], {(0, 1): rel, (0, 2): rel, (1, 2): R(0.0, 0.01)},
-                  length=0.55)
-    two = cluster([seat, left, behind], {(0, 1): rel, (0, 2): rel, (1, 2): R(0.0, 0.01)},
-                  length=0.55)
+    one = cluster(
+        [seat, left, right], {(0, 1): rel, (0, 2): rel, (1, 2): R(0.0, 0.01)}, length=0.55
+    )
+    two = cluster(
+        [seat, left, behind], {(0, 1): rel, (0, 2): rel, (1, 2): R(0.0, 0.01)}, length=0.55
+    )
     assert continuations(one)[1] == frozenset({2})
     assert continuations(two)[1] == frozenset()  # parallel, but 14 cm behind: another surface
     chair = builtin_ontology()["chair"]
@@ -281,8 +315,10 @@ def test_a_second_large_surface_costs_a_table_more_than_clutter():
     extra = {c.feature: c.factor for c in with_seat.constraints if c.part == "cluster"}
     assert extra["extra_plane"] == pytest.approx(0.5)
     assert with_book.likelihood > with_seat.likelihood
-    text = ("format: ontodetect.ontology/1\nclasses:\n  thing:\n    extra_surface: 0\n"
-            "    parts: {top: {tilt: {max: 5}}}\n")
+    text = (
+        "format: ontodetect.ontology/1\nclasses:\n  thing:\n    extra_surface: 0\n"
+        "    parts: {top: {tilt: {max: 5}}}\n"
+    )
     with pytest.raises(InvalidOntologyError, match=r"extra_surface"):
         parse_ontology(text, "x.yaml")
 
@@ -290,8 +326,15 @@ def test_a_second_large_surface_costs_a_table_more_than_clutter():
 def backrest_behind_desk(*, bottom=0.5, shelter=0.74):
     """Only the upper backrest of a chair pushed under a desk: a lifted reclined plane."""
     back = P(tilt=70, height=0.75, length=0.42, width=0.5)
-    return ClusterDescription(planes=[back], relations={}, length=0.44, breadth=0.24,
-                              height=0.98, bottom=bottom, shelter=shelter)
+    return ClusterDescription(
+        planes=[back],
+        relations={},
+        length=0.44,
+        breadth=0.24,
+        height=0.98,
+        bottom=bottom,
+        shelter=shelter,
+    )
 
 
 def test_seat_hidden_behind_a_desk_counts_as_occluded():
@@ -302,8 +345,12 @@ def test_seat_hidden_behind_a_desk_counts_as_occluded():
     assert missing_factor(seat, backrest_behind_desk()) == pytest.approx(0.15)
     # Standing on the floor, with nothing beside it, or seen from far above where a
     # seat could be: a missing seat is simply missing.
-    for desc in (backrest_behind_desk(bottom=0.03), backrest_behind_desk(shelter=-math.inf),
-                 backrest_behind_desk(shelter=0.3), backrest_behind_desk(bottom=0.9)):
+    for desc in (
+        backrest_behind_desk(bottom=0.03),
+        backrest_behind_desk(shelter=-math.inf),
+        backrest_behind_desk(shelter=0.3),
+        backrest_behind_desk(bottom=0.9),
+    ):
         assert missing_factor(seat, desc) == pytest.approx(seat.missing)
     hidden = score_cluster(backrest_behind_desk(), o)
     alone = score_cluster(backrest_behind_desk(shelter=-math.inf), o)
@@ -314,8 +361,10 @@ def test_seat_hidden_behind_a_desk_counts_as_occluded():
 
 
 def test_occluded_without_a_height_constraint_and_invalid_values(tmp_path):
-    text = ("format: ontodetect.ontology/1\nclasses:\n  thing:\n    parts:\n"
-            "      foot: {occluded: 0.4, tilt: {max: 5}}\n      side: {tilt: {min: 80}}\n")
+    text = (
+        "format: ontodetect.ontology/1\nclasses:\n  thing:\n    parts:\n"
+        "      foot: {occluded: 0.4, tilt: {max: 5}}\n      side: {tilt: {min: 80}}\n"
+    )
     o = parse_ontology(text, "x.yaml")
     foot, side = o["thing"].part("foot"), o["thing"].part("side")
     assert side.occluded is None
@@ -344,8 +393,7 @@ classes:
         f = score_class(o["thing"], d).factors["top"]
         assert f["He"] == pytest.approx(math.exp(-0.5 * ((h - 0.7) / 0.1) ** 2))
         assert f["Or"] == pytest.approx(math.exp(-0.5 * (max(tilt - 5, 0) / 2) ** 2))
-        assert f["De"] == pytest.approx(math.exp(-0.5 * (min(fill - 0.5, 0) / 0.1) ** 2),
-                                        rel=1e-6)
+        assert f["De"] == pytest.approx(math.exp(-0.5 * (min(fill - 0.5, 0) / 0.1) ** 2), rel=1e-6)
 
 
 def test_gaussian_forms():
@@ -375,15 +423,28 @@ def test_prior_lowers_posterior_in_unlikely_rooms():
     assert p_corr < p_living
 
 
-@pytest.mark.parametrize(("body", "line", "key"), [
-    ("  chair:\n    parts:\n      seat: {height: [0.7, 0.3]}\n", 5,
-     "classes.chair.parts.seat.height"),
-    ("  chair:\n    parts:\n      seat: {colour: [1, 2]}\n", 5, "classes.chair.parts.seat.colour"),
-    ("  chair:\n    parts:\n      seat: {tilt: 3}\n", 5, "classes.chair.parts.seat.tilt"),
-    ("  chair:\n    parts: {seat: {}}\n    relations:\n      - {between: [seat, back]}\n",
-     6, "classes.chair.relations[0].between[1]"),
-    ("  chair:\n    partz: {}\n", 4, "classes.chair.partz"),
-])
+@pytest.mark.parametrize(
+    ("body", "line", "key"),
+    [
+        (
+            "  chair:\n    parts:\n      seat: {height: [0.7, 0.3]}\n",
+            5,
+            "classes.chair.parts.seat.height",
+        ),
+        (
+            "  chair:\n    parts:\n      seat: {colour: [1, 2]}\n",
+            5,
+            "classes.chair.parts.seat.colour",
+        ),
+        ("  chair:\n    parts:\n      seat: {tilt: 3}\n", 5, "classes.chair.parts.seat.tilt"),
+        (
+            "  chair:\n    parts: {seat: {}}\n    relations:\n      - {between: [seat, back]}\n",
+            6,
+            "classes.chair.relations[0].between[1]",
+        ),
+        ("  chair:\n    partz: {}\n", 4, "classes.chair.partz"),
+    ],
+)
 def test_ontology_errors_name_file_line_and_key(tmp_path, body, line, key):
     f = tmp_path / "my.yaml"
     f.write_text("format: ontodetect.ontology/1\nclasses:\n" + body)
@@ -420,5 +481,7 @@ classes:
     assert float(g(0.25)) == pytest.approx(math.exp(-0.5))
     assert float(g(3.5)) == pytest.approx(math.exp(-2.0))
     with pytest.raises(InvalidOntologyError, match="min < max"):
-        parse_ontology("format: ontodetect.ontology/1\nclasses:\n  t:\n    parts:\n"
-                       "      top: {length: {min: 3, max: 1}}\n")
+        parse_ontology(
+            "format: ontodetect.ontology/1\nclasses:\n  t:\n    parts:\n"
+            "      top: {length: {min: 3, max: 1}}\n"
+        )

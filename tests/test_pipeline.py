@@ -76,11 +76,13 @@ def test_shelter_is_the_highest_top_beside_a_cluster():
         return SimpleNamespace(tilt=tilt, height=height, area=area)
 
     def box(cx, cy, sx, sy, yaw=0.0):
-        return SimpleNamespace(center=np.array([cx, cy, 0.5]), size=np.array([sx, sy, 1.0]),
-                               yaw=yaw)
+        return SimpleNamespace(
+            center=np.array([cx, cy, 0.5]), size=np.array([sx, sy, 1.0]), yaw=yaw
+        )
 
-    desk = SimpleNamespace(planes=[plane(1, 0.74, 1.2), plane(88, 0.4, 0.5)],
-                           box=box(0, 0, 1.6, 0.8))
+    desk = SimpleNamespace(
+        planes=[plane(1, 0.74, 1.2), plane(88, 0.4, 0.5)], box=box(0, 0, 1.6, 0.8)
+    )
     backrest = SimpleNamespace(planes=[plane(70, 0.8, 0.15)], box=box(0, 0.7, 0.45, 0.25))
     # A 45-degree turn of a 0.4 m square reaches 0.28 m from its centre.
     far = SimpleNamespace(planes=[plane(2, 0.45, 0.2)], box=box(1.6, 0, 0.4, 0.4, math.pi / 4))
@@ -103,8 +105,14 @@ def test_open_below_sees_the_floor_under_a_table_and_not_under_a_box(rng):
     floor = rect(rng, (0, 0, 0), (5, 0, 0), (0, 3, 0), 0.03)
     box = ((2.6, 0.6, 0.0), (3.6, 1.2, 0.75))
     under_box = np.all((floor[:, :2] > box[0][:2]) & (floor[:, :2] < box[1][:2]), axis=1)
-    pts = np.vstack([floor[~under_box], table(rng, 0.5, 0.5),
-                     slab(rng, *box), slab(rng, (1.0, 2.0, 0.0), (1.9, 2.5, 0.4))])
+    pts = np.vstack(
+        [
+            floor[~under_box],
+            table(rng, 0.5, 0.5),
+            slab(rng, *box),
+            slab(rng, (1.0, 2.0, 0.0), (1.9, 2.5, 0.4)),
+        ]
+    )
     seg = segment(pts, seed=0)
     values = open_below(seg)
     assert len(values) == len(seg)
@@ -121,8 +129,7 @@ def test_open_below_sees_the_floor_under_a_table_and_not_under_a_box(rng):
     assert tops[3] < 0.1  # the box, centred at x = 3.1
     assert len(tops) == 2  # the 0.4 m block is too low to be measured
     descs = describe_clusters(seg)
-    assert [list(d.open_below) for d in descs] == [
-        pytest.approx(v, nan_ok=True) for v in values]
+    assert [list(d.open_below) for d in descs] == [pytest.approx(v, nan_ok=True) for v in values]
     # From one view the top hides the floor under it: not measured.
     assert all(d.open_below is None for d in describe_clusters(seg, viewpoint=(0, 0, 1.5)))
 
@@ -179,8 +186,9 @@ def test_class_for_label_takes_the_cheapest_reported_class():
     from ontodetect.pipeline import class_for_label
 
     o = builtin_ontology()
-    assert class_for_label(o, "table", {"table": 0.6, "side_table": 0.4, "chair": 0.1}) == \
-        "side_table"
+    assert (
+        class_for_label(o, "table", {"table": 0.6, "side_table": 0.4, "chair": 0.1}) == "side_table"
+    )
     assert class_for_label(o, "table", {"table": 0.4, "side_table": 0.6}) == "table"
     assert class_for_label(o, "table", {}) == "side_table"  # no costs: by name
     assert class_for_label(o, "chair", {"side_table": 0.1}) == "chair"

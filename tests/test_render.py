@@ -16,9 +16,14 @@ def test_box_corners_rotate_about_the_centre():
 def test_render_writes_a_png(tmp_path, rng):
     xyz = rng.uniform(0, 3, (2000, 3))
     classes = np.where(xyz[:, 0] < 1, "chair", None)
-    out = render_scene(tmp_path / "scene.png", xyz, point_class=classes,
-                       boxes=[BoxDrawing([0.5, 1.5, 0.4], [0.5, 0.5, 0.8], 0.2, "chair", "0.9")],
-                       title="test", legend_counts={"chair": 1})
+    out = render_scene(
+        tmp_path / "scene.png",
+        xyz,
+        point_class=classes,
+        boxes=[BoxDrawing([0.5, 1.5, 0.4], [0.5, 0.5, 0.8], 0.2, "chair", "0.9")],
+        title="test",
+        legend_counts={"chair": 1},
+    )
     data = out.read_bytes()
     assert data[:8] == b"\x89PNG\r\n\x1a\n"
     assert len(data) > 10_000

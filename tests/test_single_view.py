@@ -40,7 +40,8 @@ def organized(depth: np.ndarray, **meta) -> object:
     xyz, pixels = frame_of(depth)
     h, w = depth.shape
     return point_cloud(xyz, index=pixels).with_meta(
-        organized=True, width=w, height=h, viewpoint=IDENTITY_VIEW, **meta)
+        organized=True, width=w, height=h, viewpoint=IDENTITY_VIEW, **meta
+    )
 
 
 # -- where the sensor was ---------------------------------------------------------------------
@@ -72,7 +73,8 @@ def test_pixel_grid_from_organized_rows_or_a_pixel_field():
     pixels, w, h = pixel_grid(frame)
     assert pixels.tolist() == [0, 2, 3] and (w, h) == (2, 2)
     world = point_cloud(np.zeros((2, 3)), fields={"pixel": np.array([5, 1])}).with_meta(
-        width=3, height=2)
+        width=3, height=2
+    )
     assert pixel_grid(world)[0].tolist() == [5, 1]
     assert pixel_grid(point_cloud(np.zeros((2, 3)))) is None
     assert pixel_grid(world.with_meta(width=2)) is None  # pixel 5 is outside a 2 x 2 grid
@@ -99,7 +101,8 @@ def test_depth_steps_of_a_slanted_floor_are_smoothed_along_the_rays():
     assert after.mean() < 0.3 * before.mean() and after.max() < 0.4 * before.max()
     # points moved only along their rays; rows, fields and meta are kept
     cos = np.einsum("ij,ij->i", smooth.xyz, frame.xyz) / (
-        np.linalg.norm(smooth.xyz, axis=1) * np.linalg.norm(frame.xyz, axis=1))
+        np.linalg.norm(smooth.xyz, axis=1) * np.linalg.norm(frame.xyz, axis=1)
+    )
     assert np.all(cos > 1 - 1e-9)
     assert np.array_equal(smooth.index, frame.index)
     assert smooth.meta == {**frame.meta, "depth_smoothed": True}
@@ -137,8 +140,16 @@ def test_hidden_height_lies_under_the_top_and_rises_with_distance(top, eye, d):
 
 
 def _backrest_only(bottom: float, hidden_below: float, shelter: float = -math.inf):
-    return ClusterDescription(planes=[], relations={}, length=0.5, breadth=0.2, height=0.95,
-                              bottom=bottom, shelter=shelter, hidden_below=hidden_below)
+    return ClusterDescription(
+        planes=[],
+        relations={},
+        length=0.5,
+        breadth=0.2,
+        height=0.95,
+        bottom=bottom,
+        shelter=shelter,
+        hidden_below=hidden_below,
+    )
 
 
 def test_a_seat_hidden_behind_its_backrest_counts_as_occluded():
@@ -155,8 +166,9 @@ def test_a_seat_hidden_behind_its_backrest_counts_as_occluded():
 
 
 def test_an_office_chair_seen_from_behind_is_found_in_a_single_frame():
-    chair = dataclasses.replace(place(make_furniture("chair-office", 4), 3.0, 3.5, 0.0),
-                                instance_id=7)
+    chair = dataclasses.replace(
+        place(make_furniture("chair-office", 4), 3.0, 3.5, 0.0), instance_id=7
+    )
     scene = box_room([chair], size=(6.0, 6.0, 2.6))
     # the camera stands 2.75 m behind the chair, 1.2 m up: the backrest hides the seat
     pose = _look_at(np.array([[3.0, 0.75, 1.2]]), np.array([[3.0, 3.5, 0.5]]))[0]

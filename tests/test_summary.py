@@ -18,8 +18,9 @@ def _room(rng, up_axis=2, sign=1, scale=1.0, n=20000):
     return pts[:, order] * scale
 
 
-@pytest.mark.parametrize(("axis", "sign", "expected"),
-                         [(2, 1, "+z"), (1, 1, "+y"), (0, 1, "+x"), (2, -1, "-z")])
+@pytest.mark.parametrize(
+    ("axis", "sign", "expected"), [(2, 1, "+z"), (1, 1, "+y"), (0, 1, "+x"), (2, -1, "-z")]
+)
 def test_up_axis_guess(rng, axis, sign, expected):
     up, conf = guess_up_axis(_room(rng, axis, sign))
     assert up == expected
@@ -52,7 +53,8 @@ def test_describe_cloud_tells_a_single_view_from_a_fused_scan(rng):
     assert fused.sensor is None and fused.to_dict()["sensor"] is None
     xyz = rng.random((6, 3)) + [0.0, 0.0, 1.0]
     frame = point_cloud(xyz, index=[0, 1, 2, 4, 5, 7]).with_meta(
-        organized=True, width=4, height=2, viewpoint=[0.5, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0])
+        organized=True, width=4, height=2, viewpoint=[0.5, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]
+    )
     assert describe_cloud(frame).sensor == [0.5, 0.0, 0.0]
     # an unorganized cloud's VIEWPOINT (a PCD default) says nothing about one view
     assert describe_cloud(frame.with_meta(organized=False)).sensor is None

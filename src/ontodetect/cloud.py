@@ -24,8 +24,23 @@ __all__ = ["DataWarning", "PointCloud", "pixel_grid", "point_cloud", "sensor_pos
 
 #: Names that are not allowed as extra fields because the cloud stores them itself.
 RESERVED_FIELDS = frozenset(
-    {"x", "y", "z", "red", "green", "blue", "rgb", "rgba", "nx", "ny", "nz", "normal_x",
-     "normal_y", "normal_z", "index"}
+    {
+        "x",
+        "y",
+        "z",
+        "red",
+        "green",
+        "blue",
+        "rgb",
+        "rgba",
+        "nx",
+        "ny",
+        "nz",
+        "normal_x",
+        "normal_y",
+        "normal_z",
+        "index",
+    }
 )
 
 
@@ -93,8 +108,10 @@ class PointCloud:
 
     def __reduce__(self) -> tuple[Any, ...]:
         # For worker processes: the read-only mappings travel as plain dicts.
-        return (_rebuild, (self.xyz, self.rgb, self.normals, dict(self.fields), self._index,
-                           dict(self.meta)))
+        return (
+            _rebuild,
+            (self.xyz, self.rgb, self.normals, dict(self.fields), self._index, dict(self.meta)),
+        )
 
     def __delattr__(self, name: str) -> None:
         raise AttributeError(f"PointCloud is immutable: cannot delete {name!r}")
@@ -110,8 +127,13 @@ class PointCloud:
     def is_complete(self) -> bool:
         """True when the cloud holds every row of its file in order (no point dropped)."""
         return self._index is None or (
-            len(self._index) == 0 or (self._index[0] == 0 and self._index[-1] == len(self) - 1
-                                      and bool(np.all(np.diff(self._index) == 1))))
+            len(self._index) == 0
+            or (
+                self._index[0] == 0
+                and self._index[-1] == len(self) - 1
+                and bool(np.all(np.diff(self._index) == 1))
+            )
+        )
 
     # -- basic facts -----------------------------------------------------------------
     def __len__(self) -> int:
@@ -196,8 +218,12 @@ class PointCloud:
         [2.0, 0.0, 0.0]
         """
         current = {
-            "xyz": self.xyz, "rgb": self.rgb, "normals": self.normals,
-            "fields": dict(self.fields), "index": self._index, "meta": dict(self.meta),
+            "xyz": self.xyz,
+            "rgb": self.rgb,
+            "normals": self.normals,
+            "fields": dict(self.fields),
+            "index": self._index,
+            "meta": dict(self.meta),
         }
         unknown = set(changes) - set(current)
         if unknown:
@@ -215,8 +241,9 @@ class PointCloud:
         """A new cloud sharing the arrays, with entries added to :attr:`meta`."""
         merged = dict(self.meta)
         merged.update(meta)
-        return PointCloud(self.xyz, self.rgb, self.normals, self.fields, self._index,
-                          MappingProxyType(merged))
+        return PointCloud(
+            self.xyz, self.rgb, self.normals, self.fields, self._index, MappingProxyType(merged)
+        )
 
     # -- Open3D ----------------------------------------------------------------------
     def to_open3d(self) -> Any:
@@ -266,9 +293,14 @@ def _as_colors(a: ArrayLike, n: int, copy: bool) -> NDArray[np.uint8]:
     raise InvalidParameterError("rgb", "a numeric array", f"dtype {arr.dtype}")
 
 
-def _rebuild(xyz: NDArray[np.float64], rgb: NDArray[np.uint8] | None,
-             normals: NDArray[np.float64] | None, fields: dict[str, NDArray[Any]],
-             index: NDArray[np.int64] | None, meta: dict[str, Any]) -> PointCloud:
+def _rebuild(
+    xyz: NDArray[np.float64],
+    rgb: NDArray[np.uint8] | None,
+    normals: NDArray[np.float64] | None,
+    fields: dict[str, NDArray[Any]],
+    index: NDArray[np.int64] | None,
+    meta: dict[str, Any],
+) -> PointCloud:
     return PointCloud(xyz, rgb, normals, MappingProxyType(fields), index, MappingProxyType(meta))
 
 

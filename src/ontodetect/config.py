@@ -292,7 +292,8 @@ class PrepareConfig(_Section):
     # The voxel grid and the cells are laid along the levelled frame's axes; a turn about
     # the vertical shows the same scan to them from another angle (detect's votes).
     turn: float = _param(
-        0.0, Interval(-180.0, 180.0, "both"),
+        0.0,
+        Interval(-180.0, 180.0, "both"),
         "Extra turn (deg) of the levelled frame about the vertical.",
     )
     # Reconstructions bend: real scanned floors rise 20 cm across a room. Heights are
@@ -454,14 +455,15 @@ class DetectConfig(_Section):
     # Eq. 3.7: beta + gamma = 1; the thesis gives no value, equal weights by default.
     beta: float = _param(0.5, FRACTION, "Energy weight of the class probability; gamma = 1 - beta.")
     none_likelihood: float = _param(
-        0.05, Interval(0.0, 1.0, "right"),
-        "Likelihood of a cluster under 'none of the classes'.")
+        0.05, Interval(0.0, 1.0, "right"), "Likelihood of a cluster under 'none of the classes'."
+    )
     context: float = _param(0.0, NON_NEGATIVE, "Strength of the seat-near-table pairwise term.")
     # One pass decides on one voxel grid: which voxels the points fall in moves planes and
     # clusters enough to make or break a detection. A majority of passes over the scan
     # turned by a fraction of a degree keeps what does not depend on the grid.
     votes: int = _param(
-        3, Interval(1, 15, "both", integer=True),
+        3,
+        Interval(1, 15, "both", integer=True),
         "Passes over the scan, each turned by vote_turn more; a majority keeps a detection.",
     )
     vote_turn: float = _param(
@@ -469,7 +471,8 @@ class DetectConfig(_Section):
     )
     # Every pass holds its own voxels and clusters: a dense scan gets one.
     vote_max_points: int = _param(
-        2_000_000, Interval(0, 10**12, "both", integer=True),
+        2_000_000,
+        Interval(0, 10**12, "both", integer=True),
         "Clouds with more points than this get a single pass.",
     )
 

@@ -47,8 +47,13 @@ class DemoResult:
     object_map: Any = None
 
 
-def run_demo(out_dir: str | os.PathLike[str], *, room: str = DEMO_ROOM,
-             seed: int = DEMO_SEED, sensor: str = "rgbd") -> DemoResult:
+def run_demo(
+    out_dir: str | os.PathLike[str],
+    *,
+    room: str = DEMO_ROOM,
+    seed: int = DEMO_SEED,
+    sensor: str = "rgbd",
+) -> DemoResult:
     """Simulate a scan, detect objects in it and evaluate them against the simulator's truth.
 
     Writes ``OUT/scan/`` (the simulated scan in the project's dataset layout),
@@ -68,10 +73,12 @@ def run_demo(out_dir: str | os.PathLike[str], *, room: str = DEMO_ROOM,
     fits = fit_detections(result, seed=seed)
     result = with_cad(result, fits)
     object_map = write_object_map(fits, out, seed=seed)
-    files = write_outputs(result, out, title=f"simulated {room} (seed {seed}): "
-                                              f"{len(result.detections)} objects")
-    gts = instances_from_labels(cloud.fields["instance"], cloud.fields["class_id"], _EVALUATED,
-                                index=cloud.index)
+    files = write_outputs(
+        result, out, title=f"simulated {room} (seed {seed}): {len(result.detections)} objects"
+    )
+    gts = instances_from_labels(
+        cloud.fields["instance"], cloud.fields["class_id"], _EVALUATED, index=cloud.index
+    )
     preds = [Instance.make(d.id, d.label, d.point_indices, d.score) for d in result.detections]
     evaluation = evaluate_scenes([SceneResult(f"{room}-{seed}", preds, gts)])
     return DemoResult(scan_dir, files, result, evaluation, object_map)

@@ -80,7 +80,11 @@ class InvalidOntologyError(OntoDetectError):
     """An ontology file breaks its schema; the message names the file, line and key."""
 
     def __init__(
-        self, path: str | PathLike[str] | None, problem: str, *, line: int | None = None,
+        self,
+        path: str | PathLike[str] | None,
+        problem: str,
+        *,
+        line: int | None = None,
         key: str | None = None,
     ) -> None:
         self.path = None if path is None else str(path)

@@ -31,8 +31,13 @@ class OutputFiles:
     picture: Path | None
 
 
-def write_outputs(result: Result, out_dir: str | os.PathLike[str], *,
-                  picture: bool = True, title: str | None = None) -> OutputFiles:
+def write_outputs(
+    result: Result,
+    out_dir: str | os.PathLike[str],
+    *,
+    picture: bool = True,
+    title: str | None = None,
+) -> OutputFiles:
     """Write ``detections.json``, ``labelled.ply`` and ``detections.png`` into ``out_dir``.
 
     ``labelled.ply`` holds the input points (as read, minus any dropped as NaN)
@@ -49,8 +54,9 @@ def write_outputs(result: Result, out_dir: str | os.PathLike[str], *,
     det_path = write_detections(out / "detections.json", doc)
     label, instance = result.point_labels()
     cloud = result.cloud
-    labelled = cloud.replace(fields={**dict(cloud.fields), "label": label,
-                                     "instance": instance}, normals=None)
+    labelled = cloud.replace(
+        fields={**dict(cloud.fields), "label": label, "instance": instance}, normals=None
+    )
     ply_path = write_cloud(out / "labelled.ply", labelled)
     png = None
     if picture:
@@ -66,9 +72,15 @@ def write_outputs(result: Result, out_dir: str | os.PathLike[str], *,
             box = result.segmentation[d.cluster].box
             boxes.append(BoxDrawing(box.center, box.size, box.yaw, d.label, f"{d.score:.2f}"))
         src = Path(str(cloud.meta.get("source", ""))).name or "scan"
-        png = render_scene(out / "detections.png", levelled.xyz, rgb=cloud.rgb,
-                           point_class=point_class, boxes=boxes, legend_counts=counts,
-                           title=title or f"{src}: {len(result.detections)} objects")
+        png = render_scene(
+            out / "detections.png",
+            levelled.xyz,
+            rgb=cloud.rgb,
+            point_class=point_class,
+            boxes=boxes,
+            legend_counts=counts,
+            title=title or f"{src}: {len(result.detections)} objects",
+        )
     return OutputFiles(det_path, ply_path, png)
 
 
@@ -86,20 +98,38 @@ def explain(result: Result, *, top: int = 3) -> list[dict[str, Any]]:
                 classes.append({"class": "none", "probability": p})
                 continue
             cs = s.classes[name]
-            classes.append({
-                "class": name, "probability": p, "likelihood": cs.likelihood,
-                "prior": float(np.exp(cs.log_prior)),
-                "assignment": dict(cs.assignment),
-                "factors": {part: dict(f) for part, f in cs.factors.items()},
-                "constraints": [
-                    {"part": v.part, "feature": v.feature, "group": v.group,
-                     "value": v.value, "rule": v.gaussian.describe() if v.gaussian else "",
-                     "factor": v.factor} for v in cs.constraints],
-            })
-        rows.append({
-            "cluster": k, "num_points": c.num_points, "box": c.box.to_dict(),
-            "planes": len(c.planes), "flags": dict(c.flags),
-            "label": choice.label, "reason": choice.reason,
-            "costs": dict(choice.costs), "classes": classes,
-        })
+            classes.append(
+                {
+                    "class": name,
+                    "probability": p,
+                    "likelihood": cs.likelihood,
+                    "prior": float(np.exp(cs.log_prior)),
+                    "assignment": dict(cs.assignment),
+                    "factors": {part: dict(f) for part, f in cs.factors.items()},
+                    "constraints": [
+                        {
+                            "part": v.part,
+                            "feature": v.feature,
+                            "group": v.group,
+                            "value": v.value,
+                            "rule": v.gaussian.describe() if v.gaussian else "",
+                            "factor": v.factor,
+                        }
+                        for v in cs.constraints
+                    ],
+                }
+            )
+        rows.append(
+            {
+                "cluster": k,
+                "num_points": c.num_points,
+                "box": c.box.to_dict(),
+                "planes": len(c.planes),
+                "flags": dict(c.flags),
+                "label": choice.label,
+                "reason": choice.reason,
+                "costs": dict(choice.costs),
+                "classes": classes,
+            }
+        )
     return rows

@@ -45,9 +45,19 @@ from .render import box_corners
 from .segment import Cluster, Segmentation, segment
 
 __all__ = [
-    "Detection", "Result", "class_for_label", "describe_cluster", "describe_clusters", "detect",
-    "hidden_heights", "majority_labels", "open_below", "pass_probabilities", "shelter_heights",
-    "vote_turns", "with_cad",
+    "Detection",
+    "Result",
+    "class_for_label",
+    "describe_cluster",
+    "describe_clusters",
+    "detect",
+    "hidden_heights",
+    "majority_labels",
+    "open_below",
+    "pass_probabilities",
+    "shelter_heights",
+    "vote_turns",
+    "with_cad",
 ]
 
 #: Format tag of detections.json.
@@ -109,9 +119,11 @@ class Detection:
             "score": round(self.score, 4),
             "probabilities": {k: round(v, 4) for k, v in self.probabilities.items()},
             "costs": {k: round(v, 4) for k, v in self.costs.items()},
-            "box": {"center": [round(float(v), 4) for v in self.center],
-                    "size": [round(float(v), 4) for v in self.size],
-                    "yaw": round(self.yaw, 4)},
+            "box": {
+                "center": [round(float(v), 4) for v in self.center],
+                "size": [round(float(v), 4) for v in self.size],
+                "yaw": round(self.yaw, 4),
+            },
             "point_indices": [int(i) for i in self.point_indices],
             "parts": self.parts,
             "cluster": self.cluster,
@@ -157,9 +169,11 @@ class Result:
     @property
     def frame(self) -> dict[str, Any]:
         prep = self.segmentation.prepared
-        return {"up": [round(float(v), 6) for v in prep.up],
-                "ground_z": round(float(prep.floor_z), 6),
-                "scale": round(float(prep.scale), 9)}
+        return {
+            "up": [round(float(v), 6) for v in prep.up],
+            "ground_z": round(float(prep.floor_z), 6),
+            "scale": round(float(prep.scale), 9),
+        }
 
     def to_dict(self) -> dict[str, Any]:
         """The ``detections.json`` document (DESIGN.md contract)."""
@@ -196,16 +210,20 @@ def with_cad(result: Result, fits: Sequence[Any]) -> Result:
     from .cad import cad_dict
 
     if len(fits) != len(result.detections):
-        raise InvalidParameterError("fits", f"one fit per detection ({len(result.detections)})",
-                                    len(fits))
-    detections = [dataclasses.replace(d, cad=cad_dict(f))
-                  for d, f in zip(result.detections, fits)]
+        raise InvalidParameterError(
+            "fits", f"one fit per detection ({len(result.detections)})", len(fits)
+        )
+    detections = [dataclasses.replace(d, cad=cad_dict(f)) for d, f in zip(result.detections, fits)]
     return dataclasses.replace(result, detections=detections)
 
 
-def describe_cluster(cluster: Cluster, shelter: float = -math.inf,
-                     ceiling: float = math.inf, hidden_below: float = -math.inf,
-                     open_below: Sequence[float] | None = None) -> ClusterDescription:
+def describe_cluster(
+    cluster: Cluster,
+    shelter: float = -math.inf,
+    ceiling: float = math.inf,
+    hidden_below: float = -math.inf,
+    open_below: Sequence[float] | None = None,
+) -> ClusterDescription:
     """What the ontology scoring needs to know about a cluster (``shelter``: see
     :func:`shelter_heights`; ``ceiling``: the top of the search volume;
     ``hidden_below``: see :func:`hidden_heights`; ``open_below``: see
@@ -224,8 +242,9 @@ def describe_cluster(cluster: Cluster, shelter: float = -math.inf,
     )
 
 
-def describe_clusters(seg: Segmentation, viewpoint: Sequence[float] | None = None
-                      ) -> list[ClusterDescription]:
+def describe_clusters(
+    seg: Segmentation, viewpoint: Sequence[float] | None = None
+) -> list[ClusterDescription]:
     """:func:`describe_cluster` for every cluster, with what stands beside it and the
     altitude cut-off of the search.
 
@@ -238,13 +257,17 @@ def describe_clusters(seg: Segmentation, viewpoint: Sequence[float] | None = Non
     hidden = np.full(len(seg), -math.inf)
     if viewpoint is not None and len(seg):
         eye = seg.prepared.level(np.asarray(viewpoint, dtype=np.float64))[0]
-        hidden = hidden_heights(np.array([c.height for c in seg], dtype=np.float64),
-                                np.array([c.box.center[:2] for c in seg], dtype=np.float64),
-                                eye)
+        hidden = hidden_heights(
+            np.array([c.height for c in seg], dtype=np.float64),
+            np.array([c.box.center[:2] for c in seg], dtype=np.float64),
+            eye,
+        )
     # From one view the floor under a top is hidden by the top itself: not measured there.
     below = open_below(seg) if viewpoint is None else [None] * len(seg)
-    return [describe_cluster(c, float(h), ceiling, float(b), o)
-            for c, h, b, o in zip(seg, shelter_heights(seg), hidden, below)]
+    return [
+        describe_cluster(c, float(h), ceiling, float(b), o)
+        for c, h, b, o in zip(seg, shelter_heights(seg), hidden, below)
+    ]
 
 
 #: Cell of the horizontal grid on which :func:`open_below` compares a plane's footprint
@@ -366,8 +389,11 @@ def shelter_heights(seg: Segmentation) -> NDArray:
     tops = np.full(n, -math.inf)
     boxes = np.zeros((n, 2, 2))
     for k, c in enumerate(seg):
-        flat = [float(p.height) for p in c.planes
-                if float(p.tilt) < HORIZONTAL_TILT and float(p.area) >= SHELTER_AREA]
+        flat = [
+            float(p.height)
+            for p in c.planes
+            if float(p.tilt) < HORIZONTAL_TILT and float(p.area) >= SHELTER_AREA
+        ]
         tops[k] = max(flat, default=-math.inf)
         boxes[k] = _footprint(c.box)
     if n == 0:
@@ -388,8 +414,9 @@ def _to_input_frame(seg: Segmentation, cluster: Cluster) -> tuple[NDArray, NDArr
     return center, np.asarray(box.size, dtype=np.float64) / prep.scale, yaw
 
 
-def _parts(seg: Segmentation, cluster: Cluster, assignment: Mapping[str, int | None]
-           ) -> list[dict[str, Any]]:
+def _parts(
+    seg: Segmentation, cluster: Cluster, assignment: Mapping[str, int | None]
+) -> list[dict[str, Any]]:
     prep = seg.prepared
     rot = prep.to_level[:3, :3] / prep.scale
     counts = prep.counts
@@ -401,16 +428,20 @@ def _parts(seg: Segmentation, cluster: Cluster, assignment: Mapping[str, int | N
         normal = rot.T @ np.asarray(plane.normal, dtype=np.float64)
         centroid = prep.from_level(np.asarray(plane.centroid, dtype=np.float64)[None])[0]
         voxels = cluster.voxels[np.asarray(plane.inliers)]
-        out.append({
-            "name": name,
-            "normal": [round(float(v), 4) for v in normal],
-            "centroid": [round(float(v), 4) for v in centroid],
-            "extent": [round(float(plane.length) / prep.scale, 4),
-                       round(float(plane.width) / prep.scale, 4)],
-            "height": round(float(plane.height) / prep.scale, 4),
-            "tilt": round(float(plane.tilt), 2),
-            "num_points": int(counts[voxels].sum()),
-        })
+        out.append(
+            {
+                "name": name,
+                "normal": [round(float(v), 4) for v in normal],
+                "centroid": [round(float(v), 4) for v in centroid],
+                "extent": [
+                    round(float(plane.length) / prep.scale, 4),
+                    round(float(plane.width) / prep.scale, 4),
+                ],
+                "height": round(float(plane.height) / prep.scale, 4),
+                "tilt": round(float(plane.tilt), 2),
+                "num_points": int(counts[voxels].sum()),
+            }
+        )
     return out
 
 
@@ -500,17 +531,32 @@ def detect(
         cloud = cloud.with_meta(sensor_position=as_position(viewpoint).tolist())
     viewpoint = sensor_position(cloud)
     if viewpoint is not None and pixel_grid(cloud) is None:
-        warnings.warn("a viewpoint but no pixel grid: if this is a depth camera's frame, its "
-                      "depth steps stay unsmoothed and read as flat parts (give the organized "
-                      "frame, such as its PCD)", DataWarning, stacklevel=2)
+        warnings.warn(
+            "a viewpoint but no pixel grid: if this is a depth camera's frame, its "
+            "depth steps stay unsmoothed and read as flat parts (give the organized "
+            "frame, such as its PCD)",
+            DataWarning,
+            stacklevel=2,
+        )
     ontology = ontology or builtin_ontology()
     priors = class_priors(ontology, room, indoor)
-    opts = {"ontology": ontology, "priors": priors, "threshold": threshold, "beta": beta,
-            "none_likelihood": none_likelihood, "context": context, "seed": seed, "up": up,
-            "scale": scale, "viewpoint": viewpoint}
+    opts = {
+        "ontology": ontology,
+        "priors": priors,
+        "threshold": threshold,
+        "beta": beta,
+        "none_likelihood": none_likelihood,
+        "context": context,
+        "seed": seed,
+        "up": up,
+        "scale": scale,
+        "viewpoint": viewpoint,
+    }
     passes = d.votes if len(cloud) <= d.vote_max_points else 1
-    turned = [config.replace(prepare={"turn": (config.prepare.turn + t + 180.0) % 360.0 - 180.0})
-              for t in vote_turns(passes, d.vote_turn)]
+    turned = [
+        config.replace(prepare={"turn": (config.prepare.turn + t + 180.0) % 360.0 - 180.0})
+        for t in vote_turns(passes, d.vote_turn)
+    ]
     workers = _vote_workers(jobs, len(turned))
     t0 = time.perf_counter()
     # A frame's depth steps, its scale, voxels, up direction and floor do not depend on the
@@ -534,8 +580,16 @@ def detect(
         timings["votes"] = time.perf_counter() - t0 - sum(timings.values())
     found.sort(key=lambda d: (-d.score, d.cluster))
     detections = [Detection(**{**d.__dict__, "id": i + 1}) for i, d in enumerate(found)]
-    return Result(cloud=cloud, detections=detections, segmentation=seg, scores=scores,
-                  choices=choices, ontology=ontology, priors=priors, timings=timings)
+    return Result(
+        cloud=cloud,
+        detections=detections,
+        segmentation=seg,
+        scores=scores,
+        choices=choices,
+        ontology=ontology,
+        priors=priors,
+        timings=timings,
+    )
 
 
 def vote_turns(votes: int, step: float) -> list[float]:
@@ -569,22 +623,33 @@ def _vote_workers(jobs: int | None, passes: int) -> int:
 PassCluster = tuple[NDArray[np.int64], dict[str, float], str | None]
 
 
-def _pass_clusters(cloud: PointCloud, config: Config, opts: Mapping[str, Any]
-                   ) -> list[PassCluster]:
+def _pass_clusters(cloud: PointCloud, config: Config, opts: Mapping[str, Any]) -> list[PassCluster]:
     """Every cluster of one pass, as the vote needs it (a unit of work for a worker)."""
     with use_reporter(None):  # a forked worker must not draw the parent's progress bars
         seg, scores, choices, _, _ = _one_pass(cloud, config, found=False, **opts)
-    return [(np.sort(cloud.index[c.point_indices]), dict(s.probabilities), ch.label)
-            for c, s, ch in zip(seg, scores, choices)]
+    return [
+        (np.sort(cloud.index[c.point_indices]), dict(s.probabilities), ch.label)
+        for c, s, ch in zip(seg, scores, choices)
+    ]
 
 
-def _one_pass(cloud: PointCloud, config: Config, *, ontology: Ontology,
-              priors: Mapping[str, float], threshold: float, beta: float,
-              none_likelihood: float, context: float, seed: int, up: Any, scale: Any,
-              viewpoint: NDArray[np.float64] | None = None, found: bool = True,
-              ground: Ground | None = None,
-              ) -> tuple[Segmentation, list[ClusterScores], list[LabelChoice], list[Detection],
-                         dict[str, float]]:
+def _one_pass(
+    cloud: PointCloud,
+    config: Config,
+    *,
+    ontology: Ontology,
+    priors: Mapping[str, float],
+    threshold: float,
+    beta: float,
+    none_likelihood: float,
+    context: float,
+    seed: int,
+    up: Any,
+    scale: Any,
+    viewpoint: NDArray[np.float64] | None = None,
+    found: bool = True,
+    ground: Ground | None = None,
+) -> tuple[Segmentation, list[ClusterScores], list[LabelChoice], list[Detection], dict[str, float]]:
     """Segment, score and label once; detections (when ``found``) numbered 0, in cluster
     order."""
     timings: dict[str, float] = {}
@@ -601,31 +666,57 @@ def _one_pass(cloud: PointCloud, config: Config, *, ontology: Ontology,
     timings["score"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    centers = (np.array([c.box.center for c in seg]) if len(seg) else np.zeros((0, 3)))
-    choices = label_clusters(scores, [c.planes for c in seg], ontology, beta=beta,
-                             threshold=threshold, centers=centers, context=context)
+    centers = np.array([c.box.center for c in seg]) if len(seg) else np.zeros((0, 3))
+    choices = label_clusters(
+        scores,
+        [c.planes for c in seg],
+        ontology,
+        beta=beta,
+        threshold=threshold,
+        centers=centers,
+        context=context,
+    )
     timings["label"] = time.perf_counter() - t0
-    detections = [_detection(cloud, seg, k, scores[k], choice.label, choice.extra["class"],
-                             choice.costs, ontology)
-                  for k, choice in enumerate(choices) if found and choice.label is not None]
+    detections = [
+        _detection(
+            cloud, seg, k, scores[k], choice.label, choice.extra["class"], choice.costs, ontology
+        )
+        for k, choice in enumerate(choices)
+        if found and choice.label is not None
+    ]
     return seg, scores, choices, detections, timings
 
 
-def _detection(cloud: PointCloud, seg: Segmentation, k: int, scores: ClusterScores,
-               label: str, cls_name: str, costs: Mapping[str, float], ontology: Ontology,
-               votes: int | None = None,
-               probabilities: Mapping[str, float] | None = None) -> Detection:
+def _detection(
+    cloud: PointCloud,
+    seg: Segmentation,
+    k: int,
+    scores: ClusterScores,
+    label: str,
+    cls_name: str,
+    costs: Mapping[str, float],
+    ontology: Ontology,
+    votes: int | None = None,
+    probabilities: Mapping[str, float] | None = None,
+) -> Detection:
     """Cluster ``k`` as a detection; its probabilities are the cluster's unless given."""
     c = seg[k]
     if probabilities is None:
         probabilities = scores.probabilities
     center, size, yaw = _to_input_frame(seg, c)
     return Detection(
-        id=0, label=label, score=label_probability(probabilities, ontology, label),
+        id=0,
+        label=label,
+        score=label_probability(probabilities, ontology, label),
         probabilities={n: float(p) for n, p in probabilities.items() if n != "none"},
-        costs=dict(costs), center=center, size=size, yaw=yaw,
+        costs=dict(costs),
+        center=center,
+        size=size,
+        yaw=yaw,
         point_indices=np.sort(cloud.index[c.point_indices]),
-        parts=_parts(seg, c, scores.classes[cls_name].assignment), cluster=k, votes=votes,
+        parts=_parts(seg, c, scores.classes[cls_name].assignment),
+        cluster=k,
+        votes=votes,
     )
 
 
@@ -664,15 +755,21 @@ def majority_labels(
     {0: ('chair', 2), 1: ('table', 2)}
     """
     need = (len(others) + 1) // 2 + 1
-    backing: list[dict[str, int]] = [{first[k]: 1} if k in first else {}
-                                     for k in range(len(clusters))]
-    dets = [Instance.make(i, label, rows)
-            for i, (label, rows) in enumerate(d for run in others for d in run)]
+    backing: list[dict[str, int]] = [
+        {first[k]: 1} if k in first else {} for k in range(len(clusters))
+    ]
+    dets = [
+        Instance.make(i, label, rows)
+        for i, (label, rows) in enumerate(d for run in others for d in run)
+    ]
     iou, _ = overlap_matrix(dets, [Instance.make(k, "", rows) for k, rows in enumerate(clusters)])
     run_of = np.repeat(np.arange(len(others)), [len(run) for run in others])
     for r in range(len(others)):
-        found = {(int(k), dets[i].label) for i in np.flatnonzero(run_of == r)
-                 for k in np.flatnonzero(iou[i] >= VOTE_IOU)}
+        found = {
+            (int(k), dets[i].label)
+            for i in np.flatnonzero(run_of == r)
+            for k in np.flatnonzero(iou[i] >= VOTE_IOU)
+        }
         for k, label in found:
             backing[k][label] = backing[k].get(label, 0) + 1
     out: dict[int, tuple[str, int]] = {}
@@ -739,9 +836,15 @@ def class_for_label(ontology: Ontology, label: str, costs: Mapping[str, float]) 
     return min(names, key=lambda n: (costs.get(n, math.inf), n))
 
 
-def _vote(cloud: PointCloud, seg: Segmentation, scores: list[ClusterScores],
-          choices: list[LabelChoice], found: list[Detection], others: list[list[PassCluster]],
-          ontology: Ontology) -> tuple[list[Detection], list[LabelChoice]]:
+def _vote(
+    cloud: PointCloud,
+    seg: Segmentation,
+    scores: list[ClusterScores],
+    choices: list[LabelChoice],
+    found: list[Detection],
+    others: list[list[PassCluster]],
+    ontology: Ontology,
+) -> tuple[list[Detection], list[LabelChoice]]:
     """Keep what a majority of the passes found (:func:`majority_labels`), on the first
     pass's clusters: a detection only the first pass made goes, and one the first pass
     missed but most of the others made comes back on the first pass's cluster. What is
@@ -758,22 +861,45 @@ def _vote(cloud: PointCloud, seg: Segmentation, scores: list[ClusterScores],
     out: list[Detection] = []
     for k in first:
         if k not in kept:
-            choices[k] = LabelChoice(None, choices[k].costs,
-                                     f"found by fewer than half of {passes} passes",
-                                     {"class": choices[k].extra["class"]})
+            choices[k] = LabelChoice(
+                None,
+                choices[k].costs,
+                f"found by fewer than half of {passes} passes",
+                {"class": choices[k].extra["class"]},
+            )
     ks = sorted(kept)
-    means = pass_probabilities([rows[k] for k in ks], [scores[k].probabilities for k in ks],
-                               [[(r, p) for r, p, _ in run] for run in others])
+    means = pass_probabilities(
+        [rows[k] for k in ks],
+        [scores[k].probabilities for k in ks],
+        [[(r, p) for r, p, _ in run] for run in others],
+    )
     for k, mean in zip(ks, means):
         label, n = kept[k]
         probabilities = {name: p for name, p in mean.items() if name != "none"}
         if k in first and first[k].label == label:
-            out.append(dataclasses.replace(
-                first[k], votes=n, probabilities=probabilities,
-                score=label_probability(probabilities, ontology, label)))
+            out.append(
+                dataclasses.replace(
+                    first[k],
+                    votes=n,
+                    probabilities=probabilities,
+                    score=label_probability(probabilities, ontology, label),
+                )
+            )
             continue
         cls_name = class_for_label(ontology, label, choices[k].costs)
         choices[k] = LabelChoice(label, choices[k].costs, "", {"class": cls_name})
-        out.append(_detection(cloud, seg, k, scores[k], label, cls_name, choices[k].costs,
-                              ontology, votes=n, probabilities=mean))
+        out.append(
+            _detection(
+                cloud,
+                seg,
+                k,
+                scores[k],
+                label,
+                cls_name,
+                choices[k].costs,
+                ontology,
+                votes=n,
+                probabilities=mean,
+            )
+        )
     return out, choices

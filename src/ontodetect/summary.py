@@ -97,7 +97,7 @@ def estimate_spacing(xyz: np.ndarray, *, sample: int = SAMPLE_SIZE, seed: int = 
 
 
 def guess_units(xyz: np.ndarray, spacing: float | None = None) -> str:
-    """"metres" or "millimetres" (or "unknown"), from the size of the scene.
+    """ "metres" or "millimetres" (or "unknown"), from the size of the scene.
 
     Examples
     --------

@@ -55,6 +55,7 @@ _register_commands()
 
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI; returns the exit status instead of raising ``SystemExit``."""
+
     def _show_warning(message, category, filename, lineno, file=None, line=None):
         err_console.print(f"[yellow]warning:[/] {message}", highlight=False)
 

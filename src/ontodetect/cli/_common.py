@@ -22,8 +22,9 @@ def load_config(config: Path | None, overrides: list[str]) -> Config:
 def load_ontology_option(files: list[Path], only: bool) -> Ontology:
     """The built-in ontology with ``--ontology`` files merged in (or only them)."""
     if only and not files:
-        raise InvalidParameterError("--ontology-only", "used with at least one --ontology FILE",
-                                    "no file")
+        raise InvalidParameterError(
+            "--ontology-only", "used with at least one --ontology FILE", "no file"
+        )
     return load_ontology(*files, replace=only)
 
 

@@ -27,8 +27,9 @@ def demo(
     for name, m in d.evaluation.per_class.items():
         if m.num_gt == 0 and m.num_pred == 0:
             continue  # nothing of this class in the room, nothing claimed
-        table.add_row(name, str(m.num_gt), str(m.num_pred), str(m.tp), f"{m.precision:.2f}",
-                      f"{m.recall:.2f}")
+        table.add_row(
+            name, str(m.num_gt), str(m.num_pred), str(m.tp), f"{m.precision:.2f}", f"{m.recall:.2f}"
+        )
     console.print(table)
     console.print("correct = point IoU >= 0.25 with a ground-truth object of the same class")
     console.print(f"scan:    {d.scan_dir}/cloud.ply (+ objects.json, scene.json)")

@@ -23,39 +23,63 @@ def detect(
     out: Path = typer.Option(..., "--out", "-o", help="Output folder."),
     format: str | None = typer.Option(None, "--format", "-f", help="Force the input format."),
     config: Path | None = typer.Option(None, "--config", "-c", help="Configuration YAML."),
-    set_: list[str] = typer.Option([], "--set", metavar="KEY=VALUE",
-                                   help="Override one parameter, e.g. --set cluster.radius=0.04"),
-    ontology: list[Path] = typer.Option([], "--ontology",
-                                        help="Ontology YAML to add (repeatable)."),
-    ontology_only: bool = typer.Option(False, "--ontology-only",
-                                       help="Use only the --ontology files, not the built-ins."),
-    room: str | None = typer.Option(None, "--room", help="Room category for the prior, e.g. "
-                                    "office, living_room, conference (Places205)."),
-    room_probs: Path | None = typer.Option(None, "--room-probs",
-                                           help="YAML/JSON mapping room category -> probability."),
+    set_: list[str] = typer.Option(
+        [],
+        "--set",
+        metavar="KEY=VALUE",
+        help="Override one parameter, e.g. --set cluster.radius=0.04",
+    ),
+    ontology: list[Path] = typer.Option(
+        [], "--ontology", help="Ontology YAML to add (repeatable)."
+    ),
+    ontology_only: bool = typer.Option(
+        False, "--ontology-only", help="Use only the --ontology files, not the built-ins."
+    ),
+    room: str | None = typer.Option(
+        None,
+        "--room",
+        help="Room category for the prior, e.g. office, living_room, conference (Places205).",
+    ),
+    room_probs: Path | None = typer.Option(
+        None, "--room-probs", help="YAML/JSON mapping room category -> probability."
+    ),
     indoor: float | None = typer.Option(None, "--indoor", help="P(indoor), Eq. 3.5."),
     up: str | None = typer.Option(None, "--up", help="Up axis: z (default), auto, y, -y, ..."),
     scale: float | None = typer.Option(None, "--scale", help="Scale factor k_s to metres."),
     viewpoint: str | None = typer.Option(
-        None, "--viewpoint", metavar="X,Y,Z",
+        None,
+        "--viewpoint",
+        metavar="X,Y,Z",
         help="Where the sensor stood, in the input's frame and units, when INPUT is one "
         "camera frame: a part the object itself hides (a seat behind its backrest) counts as "
-        "occluded. Organized PCD frames give it by their VIEWPOINT."),
+        "occluded. Organized PCD frames give it by their VIEWPOINT.",
+    ),
     threshold: float | None = typer.Option(
-        None, "--threshold", help="Decision threshold (detect.threshold; Table 4.1: 0.15)."),
+        None, "--threshold", help="Decision threshold (detect.threshold; Table 4.1: 0.15)."
+    ),
     beta: float | None = typer.Option(
-        None, "--beta", help="Energy weight of the class probability (detect.beta)."),
+        None, "--beta", help="Energy weight of the class probability (detect.beta)."
+    ),
     context: float | None = typer.Option(
-        None, "--context", help="Seat-near-table pairwise strength (detect.context)."),
+        None, "--context", help="Seat-near-table pairwise strength (detect.context)."
+    ),
     votes: int | None = typer.Option(
-        None, "--votes", help="Passes over the scan, a majority keeps a detection "
-        "(detect.votes, default 3; 1: one pass, about half the time)."),
+        None,
+        "--votes",
+        help="Passes over the scan, a majority keeps a detection "
+        "(detect.votes, default 3; 1: one pass, about half the time).",
+    ),
     seed: int = typer.Option(0, "--seed", help="Seed of every random step."),
-    explain_: bool = typer.Option(False, "--explain",
-                                  help="Print every constraint's probability and the label costs."),
+    explain_: bool = typer.Option(
+        False, "--explain", help="Print every constraint's probability and the label costs."
+    ),
     picture: bool = typer.Option(True, "--picture/--no-picture", help="Write detections.png."),
-    cad: bool = typer.Option(False, "--cad", help="Fit generic CAD models; write the object map "
-                             "(object_map.ply, object_map.glb) and add 'cad' to detections.json."),
+    cad: bool = typer.Option(
+        False,
+        "--cad",
+        help="Fit generic CAD models; write the object map "
+        "(object_map.ply, object_map.glb) and add 'cad' to detections.json.",
+    ),
 ) -> None:
     """Detect objects; write detections.json, labelled.ply and detections.png."""
     cfg = load_config(config, set_)
@@ -66,9 +90,21 @@ def detect(
         eye = as_position(eye, "--viewpoint")
     with reporting():
         cloud = read_cloud(path, format=format)
-        result = run_detect(cloud, config=cfg, ontology=onto, room=room_arg, indoor=indoor,
-                            threshold=threshold, beta=beta, context=context, votes=votes,
-                            seed=seed, up=up, scale=scale, viewpoint=eye)
+        result = run_detect(
+            cloud,
+            config=cfg,
+            ontology=onto,
+            room=room_arg,
+            indoor=indoor,
+            threshold=threshold,
+            beta=beta,
+            context=context,
+            votes=votes,
+            seed=seed,
+            up=up,
+            scale=scale,
+            viewpoint=eye,
+        )
         object_map = None
         if cad:
             from ..cad import fit_detections, write_object_map
@@ -83,26 +119,36 @@ def detect(
         _print_explain(result)
     if state.quiet:
         return
-    table = Table(title=f"{path.name}: {len(result.detections)} objects "
-                        f"({len(result.segmentation)} clusters)")
+    table = Table(
+        title=f"{path.name}: {len(result.detections)} objects ({len(result.segmentation)} clusters)"
+    )
     for col in ("id", "label", "score", "points", "center", "size"):
         table.add_column(col, justify="right" if col in ("id", "score", "points") else "left")
     for d in result.detections:
-        table.add_row(str(d.id), d.label, f"{d.score:.3f}", f"{len(d.point_indices):,}",
-                      " ".join(f"{v:.2f}" for v in d.center), " ".join(f"{v:.2f}" for v in d.size))
+        table.add_row(
+            str(d.id),
+            d.label,
+            f"{d.score:.3f}",
+            f"{len(d.point_indices):,}",
+            " ".join(f"{v:.2f}" for v in d.center),
+            " ".join(f"{v:.2f}" for v in d.size),
+        )
     console.print(table)
-    console.print(f"wrote {files.detections}, {files.labelled}"
-                  + (f", {files.picture}" if files.picture else "")
-                  + (", object_map.ply, object_map.glb" if object_map is not None else ""))
+    console.print(
+        f"wrote {files.detections}, {files.labelled}"
+        + (f", {files.picture}" if files.picture else "")
+        + (", object_map.ply, object_map.glb" if object_map is not None else "")
+    )
     if state.verbose:
         console.print(json.dumps(result.to_dict()["timings"]))
 
 
 def _print_explain(result) -> None:
     for row in explain(result):
-        head = (f"cluster {row['cluster']}: {row['num_points']} points, {row['planes']} planes"
-                f" -> {row['label'] or 'no label'}"
-                + (f" ({row['reason']})" if row["reason"] else ""))
+        head = (
+            f"cluster {row['cluster']}: {row['num_points']} points, {row['planes']} planes"
+            f" -> {row['label'] or 'no label'}" + (f" ({row['reason']})" if row["reason"] else "")
+        )
         console.print(f"[bold]{head}[/]")
         probs = Table(show_header=True, box=None, pad_edge=False)
         probs.add_column("class")
@@ -110,8 +156,9 @@ def _print_explain(result) -> None:
         probs.add_column("cost U", justify="right")
         for c in row["classes"]:
             cost = row["costs"].get(c["class"])
-            probs.add_row(c["class"], f"{c['probability']:.3g}",
-                          "" if cost is None else f"{cost:.3f}")
+            probs.add_row(
+                c["class"], f"{c['probability']:.3g}", "" if cost is None else f"{cost:.3f}"
+            )
         console.print(probs)
         best = next((c for c in row["classes"] if c["class"] != "none"), None)
         if best is None:
@@ -120,8 +167,12 @@ def _print_explain(result) -> None:
         for col in ("part", "feature", "factor group", "value", "rule", "probability"):
             cons.add_column(col)
         for v in best["constraints"]:
-            value = f"{v['value']:.3g}" if v["value"] is not None else (
-                "missing" if v["feature"] == "missing" else "not measured")
-            cons.add_row(v["part"], v["feature"], v["group"], value, v["rule"],
-                         f"{v['factor']:.3g}")
+            value = (
+                f"{v['value']:.3g}"
+                if v["value"] is not None
+                else ("missing" if v["feature"] == "missing" else "not measured")
+            )
+            cons.add_row(
+                v["part"], v["feature"], v["group"], value, v["rule"], f"{v['factor']:.3g}"
+            )
         console.print(cons)

@@ -114,17 +114,22 @@ def eval_(
         None, "--context", help="Seat-near-table pairwise strength (detect.context)."
     ),
     votes: int | None = typer.Option(
-        None, "--votes", help="Passes over each scan, a majority keeps a detection "
-        "(detect.votes, default 3)."
+        None,
+        "--votes",
+        help="Passes over each scan, a majority keeps a detection (detect.votes, default 3).",
     ),
     seed: int = typer.Option(0, "--seed", help="Seed of every random step."),
     turns: str | None = typer.Option(
-        None, "--turns", metavar="DEG,DEG,...",
+        None,
+        "--turns",
+        metavar="DEG,DEG,...",
         help="Detect every scene once per turn about the vertical (e.g. 0,90,180,270) and "
         "report each turn and the pooled figure.",
     ),
     seeds: str | None = typer.Option(
-        None, "--seeds", metavar="N,N,...",
+        None,
+        "--seeds",
+        metavar="N,N,...",
         help="Detect every scene (and turn) once per seed (e.g. 0,1,2), instead of --seed.",
     ),
 ) -> None:

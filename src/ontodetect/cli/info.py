@@ -35,8 +35,12 @@ def info(
     fmt3 = lambda v: "  ".join(f"{x:.3f}" for x in v)  # noqa: E731
     table.add_row("format", str(summary.format))
     table.add_row("points", f"{summary.num_points:,}")
-    attrs = ["xyz"] + (["rgb"] if summary.has_colors else []) + (
-        ["normals"] if summary.has_normals else []) + summary.fields
+    attrs = (
+        ["xyz"]
+        + (["rgb"] if summary.has_colors else [])
+        + (["normals"] if summary.has_normals else [])
+        + summary.fields
+    )
     table.add_row("fields", ", ".join(attrs))
     table.add_row("bounds min", fmt3(summary.bounds_min))
     table.add_row("bounds max", fmt3(summary.bounds_max))
@@ -48,6 +52,9 @@ def info(
     for k, v in summary.extra.items():
         table.add_row(k, str(v))
     if summary.sensor is not None:
-        table.add_row("single view", f"sensor at {fmt3(summary.sensor)}: detection smooths its "
-                      "depth steps and knows what objects hide from it")
+        table.add_row(
+            "single view",
+            f"sensor at {fmt3(summary.sensor)}: detection smooths its "
+            "depth steps and knows what objects hide from it",
+        )
     console.print(table)

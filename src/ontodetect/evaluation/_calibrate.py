@@ -629,8 +629,9 @@ def fit_gaussian(
         return prior  # a form this version does not know how to fit
     # The softness of a bound loosens like the bound: values well inside it say nothing
     # of how sharply objects beyond it fall off.
-    sigma = max(math.sqrt(((1.0 - w) * prior.sigma**2 + w * spread) * predictive), floor,
-                prior.sigma)
+    sigma = max(
+        math.sqrt(((1.0 - w) * prior.sigma**2 + w * spread) * predictive), floor, prior.sigma
+    )
     low = float(np.quantile(x, quantile))
     high = float(np.quantile(x, 1.0 - quantile))
     # The support of n samples reaches beyond their extremes by about range / (n - 1)

@@ -597,8 +597,9 @@ def _evaluate_variant(
     neither, the scene as it is under its own name."""
     source, turn, seed = unit
     opts = dict(detect_options) if seed is None else {**detect_options, "seed": seed}
-    outcome = evaluate_scene(source, opts, turn=turn or 0.0,
-                             name=variant_name(source.name, turn, seed), **kwargs)
+    outcome = evaluate_scene(
+        source, opts, turn=turn or 0.0, name=variant_name(source.name, turn, seed), **kwargs
+    )
     return dataclasses.replace(outcome, turn=turn, seed=seed)
 
 
@@ -612,11 +613,15 @@ def _check_variants(name: str, values: Sequence[Any] | None, kind: type) -> list
         if kind is int:
             ok &= isinstance(v, (int, np.integer)) and not isinstance(v, bool) and v >= 0
         else:
-            ok &= (isinstance(v, (int, float, np.integer, np.floating))
-                   and not isinstance(v, bool) and math.isfinite(float(v)))
+            ok &= (
+                isinstance(v, (int, float, np.integer, np.floating))
+                and not isinstance(v, bool)
+                and math.isfinite(float(v))
+            )
     if not ok:
-        what = ("distinct non-negative integers" if kind is int
-                else "distinct finite angles in degrees")
+        what = (
+            "distinct non-negative integers" if kind is int else "distinct finite angles in degrees"
+        )
         raise InvalidParameterError(name, f"a non-empty list of {what}", values)
     return [kind(v) for v in items]
 
@@ -740,8 +745,10 @@ class DatasetEvaluation:
             "scenes": [s.to_dict() for s in self.scenes],
             "failed": [s.to_dict() for s in self.failed],
             "by_variant": {
-                k: {"per_class": {c: m.to_dict() for c, m in e.per_class.items()},
-                    "overall": e.overall.to_dict()}
+                k: {
+                    "per_class": {c: m.to_dict() for c, m in e.per_class.items()},
+                    "overall": e.overall.to_dict(),
+                }
                 for k, e in self.by_variant.items()
             },
         }
@@ -900,8 +907,12 @@ def evaluate_dataset(
     # Scenes in parallel already use the CPUs: the passes of a vote stay in each worker.
     workers = _check_jobs(jobs)
     # A plain run is the one variant (None, None): the scene as it is, with ``seed``.
-    units = [(s, t, seed) for s in sources for t in (turn_list or [None])
-             for seed in (seed_list or [None])]
+    units = [
+        (s, t, seed)
+        for s in sources
+        for t in (turn_list or [None])
+        for seed in (seed_list or [None])
+    ]
     per_scene = {"jobs": 1, **opts} if workers > 1 and len(units) > 1 else opts
     work = functools.partial(
         _evaluate_variant,

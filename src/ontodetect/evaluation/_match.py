@@ -56,8 +56,14 @@ class Instance:
     center: NDArray[np.float64] | None = None
 
     @classmethod
-    def make(cls, id: int, label: str, points: ArrayLike, score: float = 1.0,
-             center: ArrayLike | None = None) -> Instance:
+    def make(
+        cls,
+        id: int,
+        label: str,
+        points: ArrayLike,
+        score: float = 1.0,
+        center: ArrayLike | None = None,
+    ) -> Instance:
         pts = np.unique(np.asarray(points, dtype=np.int64))
         c = None if center is None else np.asarray(center, dtype=np.float64)
         return cls(int(id), str(label), pts, float(score), c)
@@ -220,11 +226,19 @@ def match_instances(
             pred_iou[i] = float(iou[i, k])
         else:
             if p.center is None:
-                raise InvalidParameterError("preds", "instances with centres for the distance "
-                                            "criterion", f"detection {p.id} without one")
-            dist = np.array([np.inf if g.center is None or not (s and f) else
-                             float(np.linalg.norm((g.center - p.center)[:2]))
-                             for g, s, f in zip(gts, same, free)])
+                raise InvalidParameterError(
+                    "preds",
+                    "instances with centres for the distance criterion",
+                    f"detection {p.id} without one",
+                )
+            dist = np.array(
+                [
+                    np.inf
+                    if g.center is None or not (s and f)
+                    else float(np.linalg.norm((g.center - p.center)[:2]))
+                    for g, s, f in zip(gts, same, free)
+                ]
+            )
             limit = thresholds.get(p.label, DEFAULT_DISTANCE)
             if len(dist) == 0 or dist.min() > limit:
                 continue

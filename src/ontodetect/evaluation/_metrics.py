@@ -118,10 +118,12 @@ class Evaluation:
             "classes": self.classes,
             "per_class": {k: v.to_dict() for k, v in self.per_class.items()},
             "overall": self.overall.to_dict(),
-            "confusion": {"labels": self.confusion_labels,
-                          "rows": "ground truth (+ false alarm)",
-                          "cols": "predicted (+ missed)",
-                          "matrix": self.confusion.tolist()},
+            "confusion": {
+                "labels": self.confusion_labels,
+                "rows": "ground truth (+ false alarm)",
+                "cols": "predicted (+ missed)",
+                "matrix": self.confusion.tolist(),
+            },
             "per_scene": self.per_scene,
         }
 
@@ -171,8 +173,9 @@ def evaluate_scenes(
             row[c] = {"gt": n_gt, "pred": len(idx), "tp": n_tp}
         per_scene.append(row)
         # Confusion: class-agnostic matching at the same criterion.
-        ma = match_instances(preds, gts, criterion=criterion, iou_threshold=iou_threshold,
-                             class_agnostic=True)
+        ma = match_instances(
+            preds, gts, criterion=criterion, iou_threshold=iou_threshold, class_agnostic=True
+        )
         for i, k in enumerate(ma.pred_match):
             r = classes.index(gts[k].label) if k >= 0 else len(classes)
             confusion[r, classes.index(preds[i].label)] += 1
@@ -185,8 +188,8 @@ def evaluate_scenes(
     overall = _metrics("overall", sum(num_gt.values()), all_scores, all_tps)
     curves = {}
     for c in classes:
-        p, r, _ = precision_recall_curve(np.asarray(scores[c]), np.asarray(tps[c], bool),
-                                         num_gt[c])
+        p, r, _ = precision_recall_curve(np.asarray(scores[c]), np.asarray(tps[c], bool), num_gt[c])
         curves[c] = (p, r)
-    return Evaluation(classes, criterion, iou_threshold, per_class, overall, labels, confusion,
-                      per_scene, curves)
+    return Evaluation(
+        classes, criterion, iou_threshold, per_class, overall, labels, confusion, per_scene, curves
+    )

@@ -182,8 +182,9 @@ def _scene_table(evaluation: DatasetEvaluation) -> list[str]:
     per_scene = {r["scene"]: r for r in evaluation.primary.per_scene}
     rows: dict[str, dict[str, Any]] = {}
     for s in evaluation.scenes:
-        row = rows.setdefault(s.source.name, {"runs": 0, "points": s.num_points,
-                                              "seconds": 0.0, "counts": {}})
+        row = rows.setdefault(
+            s.source.name, {"runs": 0, "points": s.num_points, "seconds": 0.0, "counts": {}}
+        )
         row["runs"] += 1
         row["seconds"] += s.seconds
         r = per_scene.get(s.name, {})
@@ -193,12 +194,21 @@ def _scene_table(evaluation: DatasetEvaluation) -> list[str]:
             for i, key in enumerate(("gt", "pred", "tp")):
                 total[i] += v[key]
     runs = bool(evaluation.by_variant)
-    header = ["scene", *(["runs"] if runs else []), "points",
-              "seconds per run" if runs else "seconds", *(f"{c} (gt/det/TP)" for c in classes)]
+    header = [
+        "scene",
+        *(["runs"] if runs else []),
+        "points",
+        "seconds per run" if runs else "seconds",
+        *(f"{c} (gt/det/TP)" for c in classes),
+    ]
     table = [
-        [name, *([str(row["runs"])] if runs else []), f"{row['points']:,}",
-         f"{row['seconds'] / row['runs']:.2f}",
-         *("/".join(str(n) for n in row["counts"][c]) for c in classes)]
+        [
+            name,
+            *([str(row["runs"])] if runs else []),
+            f"{row['points']:,}",
+            f"{row['seconds'] / row['runs']:.2f}",
+            *("/".join(str(n) for n in row["counts"][c]) for c in classes),
+        ]
         for name, row in rows.items()
     ]
     return _table(header, table, "l" + ("r" if runs else "") + "rr" + "r" * len(classes))
@@ -269,10 +279,12 @@ def _variant_section(evaluation: DatasetEvaluation) -> list[str]:
         return []
     turns, seeds = evaluation.options.get("turns"), evaluation.options.get("seeds")
     runs = " and ".join(
-        text for text, given in (
+        text
+        for text, given in (
             (f"turned by {', '.join(f'{t:g}' for t in turns or [])}° about the vertical", turns),
             (f"with seeds {', '.join(str(k) for k in seeds or [])}", seeds),
-        ) if given
+        )
+        if given
     )
     return [
         "## By run",
@@ -337,8 +349,11 @@ def markdown_report(evaluation: DatasetEvaluation) -> str:
         "",
         "## Per scene (point IoU ≥ 0.25)",
         "",
-        *(["Summed over the runs of each scene; report.json lists every run.", ""]
-          if evaluation.by_variant else []),
+        *(
+            ["Summed over the runs of each scene; report.json lists every run.", ""]
+            if evaluation.by_variant
+            else []
+        ),
         *_scene_table(evaluation),
         "",
     ]

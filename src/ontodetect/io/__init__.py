@@ -56,27 +56,81 @@ class FormatInfo:
 FORMATS: dict[str, FormatInfo] = {
     f.name: f
     for f in [
-        FormatInfo("ply", "_ply", "read_ply", "write_ply", (".ply",),
-                   "Stanford PLY, ascii or binary; mesh vertices are points"),
-        FormatInfo("pcd", "_pcd", "read_pcd", "write_pcd", (".pcd",),
-                   "PCL point cloud data: ascii, binary, binary_compressed"),
-        FormatInfo("text", "_text", "read_text", "write_text", (".xyz", ".txt", ".csv", ".pts"),
-                   "columns x y z [r g b] [extra], whitespace or comma separated"),
-        FormatInfo("npy", "_numpy", "read_npy", "write_npy", (".npy",),
-                   "NumPy array (n, 3) xyz or (n, 6) xyz rgb"),
-        FormatInfo("npz", "_numpy", "read_npz", "write_npz", (".npz",),
-                   "NumPy archive with xyz (or points) and optional rgb, normals, fields"),
-        FormatInfo("las", "_las", "read_las", "write_las", (".las", ".laz"),
-                   "ASPRS LAS / LAZ lidar files"),
-        FormatInfo("3dtk", "_threedtk", "read_3dtk", None, (".3d",),
-                   "3DTK scan (scanNNN.3d + scanNNN.pose), cm, left-handed y-up"),
-        FormatInfo("scannet", "_scannet", "read_scannet", None, (),
-                   "ScanNet release scan: *_vh_clean_2.ply + aggregation + segs + label tsv"),
-        FormatInfo("scannet-votenet", "_scannet", "read_scannet_votenet", None, ("_vert.npy",),
-                   "ScanNet as preprocessed for VoteNet: *_vert.npy, *_sem_label.npy, "
-                   "*_ins_label.npy"),
-        FormatInfo("s3dis", "_s3dis", "read_s3dis", None, (),
-                   "S3DIS room folder with Annotations/<class>_<k>.txt"),
+        FormatInfo(
+            "ply",
+            "_ply",
+            "read_ply",
+            "write_ply",
+            (".ply",),
+            "Stanford PLY, ascii or binary; mesh vertices are points",
+        ),
+        FormatInfo(
+            "pcd",
+            "_pcd",
+            "read_pcd",
+            "write_pcd",
+            (".pcd",),
+            "PCL point cloud data: ascii, binary, binary_compressed",
+        ),
+        FormatInfo(
+            "text",
+            "_text",
+            "read_text",
+            "write_text",
+            (".xyz", ".txt", ".csv", ".pts"),
+            "columns x y z [r g b] [extra], whitespace or comma separated",
+        ),
+        FormatInfo(
+            "npy",
+            "_numpy",
+            "read_npy",
+            "write_npy",
+            (".npy",),
+            "NumPy array (n, 3) xyz or (n, 6) xyz rgb",
+        ),
+        FormatInfo(
+            "npz",
+            "_numpy",
+            "read_npz",
+            "write_npz",
+            (".npz",),
+            "NumPy archive with xyz (or points) and optional rgb, normals, fields",
+        ),
+        FormatInfo(
+            "las", "_las", "read_las", "write_las", (".las", ".laz"), "ASPRS LAS / LAZ lidar files"
+        ),
+        FormatInfo(
+            "3dtk",
+            "_threedtk",
+            "read_3dtk",
+            None,
+            (".3d",),
+            "3DTK scan (scanNNN.3d + scanNNN.pose), cm, left-handed y-up",
+        ),
+        FormatInfo(
+            "scannet",
+            "_scannet",
+            "read_scannet",
+            None,
+            (),
+            "ScanNet release scan: *_vh_clean_2.ply + aggregation + segs + label tsv",
+        ),
+        FormatInfo(
+            "scannet-votenet",
+            "_scannet",
+            "read_scannet_votenet",
+            None,
+            ("_vert.npy",),
+            "ScanNet as preprocessed for VoteNet: *_vert.npy, *_sem_label.npy, *_ins_label.npy",
+        ),
+        FormatInfo(
+            "s3dis",
+            "_s3dis",
+            "read_s3dis",
+            None,
+            (),
+            "S3DIS room folder with Annotations/<class>_<k>.txt",
+        ),
     ]
 }
 
@@ -84,7 +138,8 @@ FORMATS: dict[str, FormatInfo] = {
 def _load(info: FormatInfo, attr: str | None, path: Path, what: str) -> Callable[..., Any]:
     if attr is None:
         raise UnsupportedFormatError(
-            path, f"format {info.name!r} cannot be {what}",
+            path,
+            f"format {info.name!r} cannot be {what}",
             [f.name for f in FORMATS.values() if (f.writer if what == "written" else f.reader)],
         )
     module = importlib.import_module(f"{__name__}.{info.module}")
@@ -146,8 +201,9 @@ def detect_format(path: str | os.PathLike[str]) -> str:
         if any(p.glob("*.3d")):
             return "3dtk"
         raise UnsupportedFormatError(
-            p, "is a folder that is neither a ScanNet scan, an S3DIS room nor a 3DTK scan "
-            "folder", supported_formats(),
+            p,
+            "is a folder that is neither a ScanNet scan, an S3DIS room nor a 3DTK scan folder",
+            supported_formats(),
         )
     if name.endswith(("_vert.npy", "_sem_label.npy", "_ins_label.npy")):
         return "scannet-votenet"
@@ -229,10 +285,12 @@ def write_cloud(
         fmt = format.lower() if format else detect_format(p)
     except UnsupportedFormatError as exc:
         raise UnsupportedFormatError(
-            p, f"cannot choose a writer for extension {p.suffix or '(none)'!r}",
+            p,
+            f"cannot choose a writer for extension {p.suffix or '(none)'!r}",
             supported_formats("write"),
         ) from exc
     if fmt not in WRITERS:
-        raise UnsupportedFormatError(p, f"format {fmt!r} cannot be written",
-                                     supported_formats("write"))
+        raise UnsupportedFormatError(
+            p, f"format {fmt!r} cannot be written", supported_formats("write")
+        )
     return WRITERS[fmt](p, cloud, **options)

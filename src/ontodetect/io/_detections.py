@@ -44,8 +44,12 @@ def write_detections(path: str | os.PathLike[str], document: dict[str, Any]) -> 
     doc = _jsonable(document)
     validate_detections(doc, str(path))
     # Index lists go on one line each: readable, and a tenth of the size of one number a line.
-    marked = {**doc, "detections": [
-        {**d, "point_indices": f"@@points{k}@@"} for k, d in enumerate(doc["detections"])]}
+    marked = {
+        **doc,
+        "detections": [
+            {**d, "point_indices": f"@@points{k}@@"} for k, d in enumerate(doc["detections"])
+        ],
+    }
     text = json.dumps(marked, indent=2)
     for k, d in enumerate(doc["detections"]):
         text = text.replace(f'"@@points{k}@@"', json.dumps(d["point_indices"]), 1)
@@ -57,8 +61,11 @@ def _fail(source: str, where: str, problem: str) -> CorruptFileError:
 
 
 def _vec(v: Any, n: int) -> bool:
-    return (isinstance(v, list) and len(v) == n
-            and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v))
+    return (
+        isinstance(v, list)
+        and len(v) == n
+        and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)
+    )
 
 
 def validate_detections(doc: Any, source: str = "detections.json") -> None:
@@ -82,18 +89,24 @@ def validate_detections(doc: Any, source: str = "detections.json") -> None:
             raise _fail(source, where, "expected an object")
         for key, kind in (("id", int), ("label", str), ("score", (int, float))):
             if not isinstance(det.get(key), kind) or isinstance(det.get(key), bool):
-                raise _fail(source, f"{where}.{key}", f"missing or of the wrong type: "
-                                                      f"{det.get(key)!r}")
+                raise _fail(
+                    source, f"{where}.{key}", f"missing or of the wrong type: {det.get(key)!r}"
+                )
         box = det.get("box")
-        if (not isinstance(box, dict) or not _vec(box.get("center"), 3)
-                or not _vec(box.get("size"), 3) or not isinstance(box.get("yaw"), (int, float))):
+        if (
+            not isinstance(box, dict)
+            or not _vec(box.get("center"), 3)
+            or not _vec(box.get("size"), 3)
+            or not isinstance(box.get("yaw"), (int, float))
+        ):
             raise _fail(source, f"{where}.box", "expected {center: [3], size: [3], yaw}")
         pts = det.get("point_indices")
         if not isinstance(pts, list) or not all(isinstance(i, int) for i in pts):
             raise _fail(source, f"{where}.point_indices", "expected a list of integers")
         if pts and (min(pts) < 0 or max(pts) >= n):
-            raise _fail(source, f"{where}.point_indices",
-                        f"indices must lie in [0, {n}) (num_points)")
+            raise _fail(
+                source, f"{where}.point_indices", f"indices must lie in [0, {n}) (num_points)"
+            )
         for key in ("probabilities", "costs"):
             if key in det and not isinstance(det[key], dict):
                 raise _fail(source, f"{where}.{key}", "expected an object")

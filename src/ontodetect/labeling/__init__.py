@@ -91,8 +91,7 @@ def label_fit(planes: Sequence[Any], model: LabelModel) -> float:
     return f
 
 
-def label_probability(probabilities: Mapping[str, float], ontology: Ontology,
-                      label: str) -> float:
+def label_probability(probabilities: Mapping[str, float], ontology: Ontology, label: str) -> float:
     """How likely a cluster is a ``label``: the probabilities of the classes written under
     that label, summed (the built-in side table and table are both "table").
 
@@ -106,8 +105,7 @@ def label_probability(probabilities: Mapping[str, float], ontology: Ontology,
     return label_probabilities(probabilities, ontology).get(label, 0.0)
 
 
-def label_probabilities(probabilities: Mapping[str, float], ontology: Ontology
-                        ) -> dict[str, float]:
+def label_probabilities(probabilities: Mapping[str, float], ontology: Ontology) -> dict[str, float]:
     """:func:`label_probability` of every label of the ontology, in one pass."""
     out: dict[str, float] = {}
     for c in ontology.classes:
@@ -129,16 +127,23 @@ def label_costs(
     share a label are kinds of one object, so a side table does not lose the cluster to a
     chair because the cluster's table-ness is split between "table" and "side_table".
     """
-    return _costs(label_probabilities(scores.probabilities, ontology), planes, ontology,
-                  beta, gamma)
+    return _costs(
+        label_probabilities(scores.probabilities, ontology), planes, ontology, beta, gamma
+    )
 
 
-def _costs(by_label: Mapping[str, float], planes: Sequence[Any], ontology: Ontology,
-           beta: float, gamma: float) -> dict[str, float]:
+def _costs(
+    by_label: Mapping[str, float],
+    planes: Sequence[Any],
+    ontology: Ontology,
+    beta: float,
+    gamma: float,
+) -> dict[str, float]:
     """:func:`label_costs` from the cluster's :func:`label_probabilities`."""
     return {
-        cls.name: energy(by_label[cls.label], label_fit(planes, cls.labeling),
-                         beta=beta, gamma=gamma)
+        cls.name: energy(
+            by_label[cls.label], label_fit(planes, cls.labeling), beta=beta, gamma=gamma
+        )
         for cls in ontology.classes
     }
 
@@ -268,6 +273,7 @@ def label_clusters(
                 for _ in range(20):
                     changed = False
                     for i in members:
+
                         def local_e(label: str | None, i: int = i, local: list = local) -> float:
                             e = unary(i, label)
                             for a, b, k in local:
@@ -276,6 +282,7 @@ def label_clusters(
                                 elif b == i:
                                     e += pairwise(a, chosen[a], i, label, k)
                             return e
+
                         best_label = min(options[i], key=lambda lab: (local_e(lab), str(lab)))
                         if best_label != chosen[i]:
                             chosen[i], changed = best_label, True
@@ -285,14 +292,13 @@ def label_clusters(
     out = []
     for i, label in enumerate(chosen):
         if label is None:
-            reason = ("below threshold" if options[i] == [None] else "excluded by an overlap")
+            reason = "below threshold" if options[i] == [None] else "excluded by an overlap"
             if nothing[i]:
                 reason = "none of the classes"
             out.append(LabelChoice(None, costs[i], reason))
             continue
         if not ontology[label].detect:
-            out.append(LabelChoice(None, costs[i], f"{label} (not reported)",
-                                   {"class": label}))
+            out.append(LabelChoice(None, costs[i], f"{label} (not reported)", {"class": label}))
             continue
         out.append(LabelChoice(ontology[label].label, costs[i], "", {"class": label}))
     return out

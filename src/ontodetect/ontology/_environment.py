@@ -105,8 +105,11 @@ def object_prior(
 ) -> float:
     """P_obj of one class: Eq. 3.10 with a room distribution, Eq. 3.5 with P_in, else 1."""
     if rooms is not None and cls.prior_rooms is not None:
-        table = room_table(cls.prior_rooms) if isinstance(cls.prior_rooms, str) else {
-            str(k): float(v) for k, v in cls.prior_rooms.items()}
+        table = (
+            room_table(cls.prior_rooms)
+            if isinstance(cls.prior_rooms, str)
+            else {str(k): float(v) for k, v in cls.prior_rooms.items()}
+        )
         return float(sum(p * table.get(n, 0.0) for n, p in rooms.items()))
     if indoor is not None and cls.prior_indoor is not None:
         if not 0.0 <= indoor <= 1.0:

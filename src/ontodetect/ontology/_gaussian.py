@@ -62,8 +62,9 @@ class Gaussian:
         if not math.isfinite(self.mean) or not math.isfinite(self.sigma) or self.sigma <= 0:
             raise ValueError(f"Gaussian needs a finite mean and sigma > 0, got {self}")
         if self.side not in ("both", "min", "max", "plateau"):
-            raise ValueError("Gaussian side must be 'both', 'min', 'max' or 'plateau', "
-                             f"got {self.side!r}")
+            raise ValueError(
+                f"Gaussian side must be 'both', 'min', 'max' or 'plateau', got {self.side!r}"
+            )
         if self.side == "plateau" and (self.upper is None or not self.upper > self.mean):
             raise ValueError(f"a plateau needs min < max, got [{self.mean}, {self.upper}]")
 

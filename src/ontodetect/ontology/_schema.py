@@ -78,7 +78,7 @@ CLUSTER_FEATURES: dict[str, str] = {
     "bottom": "lowest point above the floor (m)",
     "planes": "number of planes found in the cluster",
     "rise": "height of the cluster above its highest horizontal plane (m): a backrest rises "
-            "above a seat, nothing rises above a cabinet top",
+    "above a seat, nothing rises above a cabinet top",
 }
 #: Factor used for a part that has no plane when the file does not say.
 DEFAULT_MISSING = {True: 0.02, False: 0.3}
@@ -235,14 +235,16 @@ def _load_yaml(text: str, source: str | None) -> tuple[Any, _Lines]:
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         raise InvalidOntologyError(
-            source, f"not valid YAML: {exc.problem or exc}",
+            source,
+            f"not valid YAML: {exc.problem or exc}",
             line=None if mark is None else mark.line + 1,
         ) from exc
     except yaml.YAMLError as exc:
         raise InvalidOntologyError(source, f"not valid YAML: {exc}") from exc
     except _Problem as exc:
-        raise InvalidOntologyError(source, exc.message, line=exc.line,
-                                   key=_dotted(exc.path)) from exc
+        raise InvalidOntologyError(
+            source, exc.message, line=exc.line, key=_dotted(exc.path)
+        ) from exc
     return data, lines
 
 
@@ -269,8 +271,10 @@ def _gaussian(value: Any, path: tuple[Any, ...]) -> Gaussian:
     if shorthand:
         value = {"range": value}
     if not isinstance(value, dict):
-        raise _Problem(path, "expected a range [low, high] or a mapping with mean/sigma, "
-                             f"min or max, got {value!r}")
+        raise _Problem(
+            path,
+            f"expected a range [low, high] or a mapping with mean/sigma, min or max, got {value!r}",
+        )
     keys = set(value)
     try:
         if "range" in keys:
@@ -307,19 +311,22 @@ def _gaussian(value: Any, path: tuple[Any, ...]) -> Gaussian:
                 soft = value.get("soft")
                 if soft is not None and _number(soft, path + ("soft",)) <= 0:
                     raise _Problem(path + ("soft",), f"soft must be > 0, got {soft!r}")
-                return make(_number(value[side], path + (side,)),
-                            None if soft is None else float(soft))
+                return make(
+                    _number(value[side], path + (side,)), None if soft is None else float(soft)
+                )
     except ValueError as exc:  # from Gaussian itself
         raise _Problem(path, str(exc)) from exc
-    raise _Problem(path, f"expected one of range, mean/sigma, min, max, min+max; got keys "
-                         f"{sorted(keys)}")
+    raise _Problem(
+        path, f"expected one of range, mean/sigma, min, max, min+max; got keys {sorted(keys)}"
+    )
 
 
 def _only(mapping: dict[str, Any], allowed: set[str], path: tuple[Any, ...]) -> None:
     for key in mapping:
         if key not in allowed:
-            raise _Problem(path + (key,), f"unknown key {key!r} (allowed: "
-                                          f"{', '.join(sorted(allowed))})")
+            raise _Problem(
+                path + (key,), f"unknown key {key!r} (allowed: {', '.join(sorted(allowed))})"
+            )
 
 
 def _mapping(value: Any, path: tuple[Any, ...]) -> dict[str, Any]:
@@ -330,21 +337,25 @@ def _mapping(value: Any, path: tuple[Any, ...]) -> dict[str, Any]:
     return value
 
 
-def _constraints(spec: dict[str, Any], allowed: Mapping[str, str], path: tuple[Any, ...],
-                 skip: set[str]) -> dict[str, Gaussian]:
+def _constraints(
+    spec: dict[str, Any], allowed: Mapping[str, str], path: tuple[Any, ...], skip: set[str]
+) -> dict[str, Gaussian]:
     out = {}
     for key, value in spec.items():
         if key in skip:
             continue
         if key not in allowed:
-            raise _Problem(path + (key,), f"unknown feature {key!r} (allowed: "
-                                          f"{', '.join(sorted(set(allowed) | skip))})")
+            raise _Problem(
+                path + (key,),
+                f"unknown feature {key!r} (allowed: {', '.join(sorted(set(allowed) | skip))})",
+            )
         out[key] = _gaussian(value, path + (key,))
     return out
 
 
-def _probability(spec: Mapping[str, Any], key: str, path: tuple[Any, ...],
-                 default: float | None = None) -> float | None:
+def _probability(
+    spec: Mapping[str, Any], key: str, path: tuple[Any, ...], default: float | None = None
+) -> float | None:
     """``spec[key]`` as a probability in (0, 1], or ``default`` when the key is absent."""
     value = spec.get(key, default)
     if value is None:
@@ -362,22 +373,29 @@ def _part(name: str, spec: Any, path: tuple[Any, ...]) -> Part:
         raise _Problem(path + ("required",), f"expected true or false, got {required!r}")
     missing = _probability(spec, "missing", path, DEFAULT_MISSING[required])
     occluded = _probability(spec, "occluded", path)
-    constraints = _constraints(spec, PART_FEATURES, path,
-                               {"required", "missing", "occluded", "description"})
-    return Part(name=name, constraints=constraints, required=required, missing=missing,
-                occluded=occluded)
+    constraints = _constraints(
+        spec, PART_FEATURES, path, {"required", "missing", "occluded", "description"}
+    )
+    return Part(
+        name=name, constraints=constraints, required=required, missing=missing, occluded=occluded
+    )
 
 
 def _relation(spec: Any, path: tuple[Any, ...], parts: set[str]) -> Relation:
     spec = _mapping(spec, path)
     between = spec.get("between")
-    if (not isinstance(between, list) or len(between) != 2
-            or not all(isinstance(b, str) for b in between)):
+    if (
+        not isinstance(between, list)
+        or len(between) != 2
+        or not all(isinstance(b, str) for b in between)
+    ):
         raise _Problem(path + ("between",), f"expected two part names, got {between!r}")
     for i, b in enumerate(between):
         if b not in parts:
-            raise _Problem(path + ("between", i), f"no part named {b!r} in this class "
-                                                  f"(parts: {', '.join(sorted(parts))})")
+            raise _Problem(
+                path + ("between", i),
+                f"no part named {b!r} in this class (parts: {', '.join(sorted(parts))})",
+            )
     if between[0] == between[1]:
         raise _Problem(path + ("between",), "a relation needs two different parts")
     constraints = _constraints(spec, RELATION_FEATURES, path, {"between", "description"})
@@ -426,8 +444,23 @@ def _prior(spec: Any, path: tuple[Any, ...]) -> tuple[Any, float | None, float |
 
 def _class(name: str, spec: Any, path: tuple[Any, ...]) -> ObjectClass:
     spec = _mapping(spec, path)
-    _only(spec, {"label", "description", "detect", "matches", "prior", "cluster", "parts",
-                 "relations", "labeling", "extra_plane", "extra_surface"}, path)
+    _only(
+        spec,
+        {
+            "label",
+            "description",
+            "detect",
+            "matches",
+            "prior",
+            "cluster",
+            "parts",
+            "relations",
+            "labeling",
+            "extra_plane",
+            "extra_surface",
+        },
+        path,
+    )
     parts_spec = _mapping(spec.get("parts"), path + ("parts",))
     if not parts_spec:
         raise _Problem(path + ("parts",), "a class needs at least one part")
@@ -454,11 +487,20 @@ def _class(name: str, spec: Any, path: tuple[Any, ...]) -> ObjectClass:
     if not isinstance(label, str) or not label:
         raise _Problem(path + ("label",), f"expected a name, got {label!r}")
     return ObjectClass(
-        name=name, label=label, description=str(spec.get("description", "")).strip(),
-        parts=parts, relations=relations, cluster=cluster,
+        name=name,
+        label=label,
+        description=str(spec.get("description", "")).strip(),
+        parts=parts,
+        relations=relations,
+        cluster=cluster,
         labeling=_labeling(spec.get("labeling"), path + ("labeling",)),
-        prior_rooms=rooms, prior_indoor=indoor, prior_outdoor=outdoor, detect=detect,
-        matches=tuple(matches), extra_plane=extra, extra_surface=surface,
+        prior_rooms=rooms,
+        prior_indoor=indoor,
+        prior_outdoor=outdoor,
+        detect=detect,
+        matches=tuple(matches),
+        extra_plane=extra,
+        extra_surface=surface,
     )
 
 
@@ -494,8 +536,9 @@ def parse_ontology(text: str, source: str | PathLike[str] | None = None) -> Onto
             raise _Problem(("classes",), "an ontology needs at least one class")
         classes = tuple(_class(str(n), s, ("classes", n)) for n, s in classes_spec.items())
     except _Problem as exc:
-        raise InvalidOntologyError(src, exc.message, line=exc.line or lines.line(exc.path),
-                                   key=_dotted(exc.path)) from exc
+        raise InvalidOntologyError(
+            src, exc.message, line=exc.line or lines.line(exc.path), key=_dotted(exc.path)
+        ) from exc
     return Ontology(classes=classes, source=src)
 
 

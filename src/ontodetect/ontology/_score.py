@@ -195,8 +195,9 @@ class ClusterScores:
 def part_values(desc: ClusterDescription, feature: str) -> NDArray[np.float64]:
     """(planes,) the value of a part feature for every plane of the cluster; NaN where it
     was not measured (``open_below`` outside :func:`ontodetect.pipeline.describe_clusters`)."""
-    return np.array([_part_value(desc, i, feature) for i in range(len(desc.planes))],
-                    dtype=np.float64)
+    return np.array(
+        [_part_value(desc, i, feature) for i in range(len(desc.planes))], dtype=np.float64
+    )
 
 
 def _part_value(desc: ClusterDescription, i: int, feature: str) -> float:
@@ -261,8 +262,10 @@ def _extra_log(cls: ObjectClass, planes: Sequence[Any]) -> np.ndarray:
     """(planes,) log-factor each plane costs when no part of ``cls`` explains it."""
     out = math.log(cls.extra_plane) * _plane_weights(planes)
     if cls.extra_surface is not None:
-        surface = np.array([float(p.tilt) < HORIZONTAL_TILT and float(p.area) >= SURFACE_AREA
-                            for p in planes], dtype=bool)
+        surface = np.array(
+            [float(p.tilt) < HORIZONTAL_TILT and float(p.area) >= SURFACE_AREA for p in planes],
+            dtype=bool,
+        )
         out[surface] = math.log(cls.extra_surface)
     return out
 
@@ -291,8 +294,9 @@ def continuations(desc: ClusterDescription) -> list[frozenset[int]]:
         if float(rel.angle) > CONTINUE_ANGLE or float(rel.distance) > CONTINUE_GAP:
             continue
         normal = np.asarray(planes[i].normal, dtype=float)
-        step = np.asarray(planes[j].centroid, dtype=float) - np.asarray(planes[i].centroid,
-                                                                          dtype=float)
+        step = np.asarray(planes[j].centroid, dtype=float) - np.asarray(
+            planes[i].centroid, dtype=float
+        )
         if abs(float(normal @ step)) <= CONTINUE_STEP:
             out[i].add(j)
             out[j].add(i)
@@ -330,7 +334,8 @@ def missing_factor(part: Part, desc: ClusterDescription) -> float:
     height = part.constraints.get("height")
     span = None if height is None else _height_span(height)
     if float(desc.shelter) >= bottom - SHELTER_TOLERANCE and (
-            span is None or (span[0] < bottom + HIDDEN_MARGIN and bottom <= span[1])):
+        span is None or (span[0] < bottom + HIDDEN_MARGIN and bottom <= span[1])
+    ):
         return max(part.missing, part.occluded)
     if span is not None and bottom - HIDDEN_MARGIN <= span[0] <= float(desc.hidden_below):
         return max(part.missing, part.occluded)
@@ -383,19 +388,20 @@ def score_class(cls: ObjectClass, desc: ClusterDescription, log_prior: float = 0
         groups = {"Or": 1.0, "He": 1.0, "De": 1.0, "Pr": 1.0}
         if plane is None:
             groups["missing"] = missing[p]
-            constraints.append(ConstraintValue(part.name, "missing", "De", None, None,
-                                               missing[p]))
+            constraints.append(ConstraintValue(part.name, "missing", "De", None, None, missing[p]))
         else:
             for feature, g in part.constraints.items():
                 value = _part_value(desc, plane, feature)
                 if math.isnan(value):  # not measured: no factor
-                    constraints.append(ConstraintValue(part.name, feature,
-                                                       PART_FEATURES[feature], None, g, 1.0))
+                    constraints.append(
+                        ConstraintValue(part.name, feature, PART_FEATURES[feature], None, g, 1.0)
+                    )
                     continue
                 f = float(g(value))
                 groups[PART_FEATURES[feature]] *= f
-                constraints.append(ConstraintValue(part.name, feature, PART_FEATURES[feature],
-                                                   value, g, f))
+                constraints.append(
+                    ConstraintValue(part.name, feature, PART_FEATURES[feature], value, g, f)
+                )
         factors[part.name] = groups
     for a, b, rel in rel_terms:
         ia, ib = best_assign[a], best_assign[b]
@@ -415,8 +421,9 @@ def score_class(cls: ObjectClass, desc: ClusterDescription, log_prior: float = 0
     if unexplained and (cls.extra_plane < 1.0 or cls.extra_surface is not None):
         f = math.exp(float(sum(plane_log_extra[k] for k in unexplained)))
         cluster_factor *= f
-        constraints.append(ConstraintValue("cluster", "extra_plane", "cluster",
-                                           float(len(unexplained)), None, f))
+        constraints.append(
+            ConstraintValue("cluster", "extra_plane", "cluster", float(len(unexplained)), None, f)
+        )
     for feature, g in cls.cluster.constraints.items():
         value = _cluster_feature(desc, feature)
         log = cluster_log_factor(g, desc, feature)
@@ -430,8 +437,12 @@ def score_class(cls: ObjectClass, desc: ClusterDescription, log_prior: float = 0
     assignment = {part.name: best_assign[p] for p, part in enumerate(cls.parts)}
     return ClassScore(
         # best_log already holds the extra-plane penalty; the cluster rules come on top.
-        name=cls.name, log_likelihood=best_log + cluster_log, log_prior=log_prior,
-        assignment=assignment, factors=factors, constraints=tuple(constraints),
+        name=cls.name,
+        log_likelihood=best_log + cluster_log,
+        log_prior=log_prior,
+        assignment=assignment,
+        factors=factors,
+        constraints=tuple(constraints),
     )
 
 
@@ -478,8 +489,9 @@ def score_cluster(
     z = sum(weights.values())
     probs = {k: w / z for k, w in weights.items()}
     scores = {
-        k: ClassScore(s.name, s.log_likelihood, s.log_prior, s.assignment, s.factors,
-                      s.constraints, probs[k])
+        k: ClassScore(
+            s.name, s.log_likelihood, s.log_prior, s.assignment, s.factors, s.constraints, probs[k]
+        )
         for k, s in scores.items()
     }
     best = max(probs, key=lambda k: (probs[k], k != NONE))

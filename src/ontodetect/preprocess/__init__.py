@@ -474,8 +474,19 @@ def find_ground(
     ):
         floor = FloorFit(u, floor.offset, floor.area, floor.found)
     clock.lap("ground")
-    return Ground(n, k_s, scale_source, grid, inliers, float(spacing), float(cell),
-                  float(confidence), cells, floor, dict(clock.laps))
+    return Ground(
+        n,
+        k_s,
+        scale_source,
+        grid,
+        inliers,
+        float(spacing),
+        float(cell),
+        float(confidence),
+        cells,
+        floor,
+        dict(clock.laps),
+    )
 
 
 def prepare(
@@ -539,7 +550,8 @@ def prepare(
         ground = find_ground(cloud, config, scale=scale, travelled=travelled, up=up)
     elif ground.num_points != n:
         raise InvalidParameterError(
-            "ground", f"the ground of this cloud ({n} points)", f"{ground.num_points} points")
+            "ground", f"the ground of this cloud ({n} points)", f"{ground.num_points} points"
+        )
     clock = _Clock()
     clock.laps.update(ground.laps)
     k_s, scale_source, colors = ground.scale, ground.scale_source, cloud.rgb

@@ -69,7 +69,10 @@ def smooth_depth(cloud: PointCloud) -> PointCloud:
     filtered = (
         o3d.t.geometry.Image(o3d.core.Tensor(image.reshape(height, width)))
         .filter_bilateral(DEPTH_KERNEL, DEPTH_VALUE_SIGMA, DEPTH_PIXEL_SIGMA)
-        .as_tensor().numpy().reshape(-1).astype(np.float64)
+        .as_tensor()
+        .numpy()
+        .reshape(-1)
+        .astype(np.float64)
     )
     inverse = filtered[pixels]
     moved = valid & (inverse > 0)

@@ -28,8 +28,14 @@ CLASS_COLORS: dict[str, tuple[float, float, float]] = {
     "stool": (1.00, 0.50, 0.00),
     "bench": (0.60, 0.31, 0.64),
 }
-_PALETTE = [(0.65, 0.34, 0.16), (0.97, 0.51, 0.75), (0.6, 0.6, 0.6), (0.74, 0.74, 0.13),
-            (0.09, 0.75, 0.81), (0.55, 0.34, 0.29)]
+_PALETTE = [
+    (0.65, 0.34, 0.16),
+    (0.97, 0.51, 0.75),
+    (0.6, 0.6, 0.6),
+    (0.74, 0.74, 0.13),
+    (0.09, 0.75, 0.81),
+    (0.55, 0.34, 0.29),
+]
 #: Points drawn at most; a denser picture shows nothing more.
 MAX_POINTS = 120_000
 #: The perspective view shows the scan up to this share of its height (no ceiling).
@@ -136,8 +142,9 @@ def render_scene(
     fig = plt.figure(figsize=(14, 6.5))
     ax_top = fig.add_subplot(1, 2, 1)
     order = np.argsort(pts[:, 2])  # higher points on top in the plan view
-    ax_top.scatter(pts[order, 0], pts[order, 1], c=colors[order], s=sizes[order], linewidths=0,
-                   rasterized=True)
+    ax_top.scatter(
+        pts[order, 0], pts[order, 1], c=colors[order], s=sizes[order], linewidths=0, rasterized=True
+    )
     ax_top.set_aspect("equal")
     ax_top.set_title("top view")
     ax_top.set_xlabel("x (m)")
@@ -147,8 +154,16 @@ def render_scene(
     if len(pts):
         lo, hi = pts.min(axis=0), pts.max(axis=0)
         below = pts[:, 2] <= lo[2] + CEILING_CUT * (hi[2] - lo[2])
-        ax3.scatter(pts[below, 0], pts[below, 1], pts[below, 2], c=colors[below],
-                    s=sizes[below] * 1.5, linewidths=0, depthshade=False, rasterized=True)
+        ax3.scatter(
+            pts[below, 0],
+            pts[below, 1],
+            pts[below, 2],
+            c=colors[below],
+            s=sizes[below] * 1.5,
+            linewidths=0,
+            depthshade=False,
+            rasterized=True,
+        )
         span = float(np.max(hi - lo)) / 2 or 1.0
         mid = (lo + hi) / 2
         ax3.set_xlim(mid[0] - span, mid[0] + span)
@@ -159,24 +174,50 @@ def render_scene(
     ax3.set_title("perspective view")
     ax3.set_axis_off()
 
-    edges = [(0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4),
-             (0, 4), (1, 5), (2, 6), (3, 7)]
+    edges = [
+        (0, 1),
+        (1, 2),
+        (2, 3),
+        (3, 0),
+        (4, 5),
+        (5, 6),
+        (6, 7),
+        (7, 4),
+        (0, 4),
+        (1, 5),
+        (2, 6),
+        (3, 7),
+    ]
     for box in boxes:
         col = class_color(box.label)
         corners = box_corners(box.center, box.size, box.yaw)
         ring = corners[[0, 1, 2, 3, 0]]
         ax_top.plot(ring[:, 0], ring[:, 1], color=col, linewidth=1.4)
         if box.text:
-            ax_top.text(corners[:4, 0].mean(), corners[:4, 1].mean(), box.text, fontsize=7,
-                        ha="center", va="center", color="black")
+            ax_top.text(
+                corners[:4, 0].mean(),
+                corners[:4, 1].mean(),
+                box.text,
+                fontsize=7,
+                ha="center",
+                va="center",
+                color="black",
+            )
         for a, b in edges:
             ax3.plot(*zip(corners[a], corners[b]), color=col, linewidth=1.0)
 
     labels = sorted({b.label for b in boxes} | set(legend_counts or {}))
     if labels:
-        handles = [Line2D([0], [0], color=class_color(n), lw=3,
-                          label=f"{n} ({legend_counts[n]})" if legend_counts and n in legend_counts
-                          else n) for n in labels]
+        handles = [
+            Line2D(
+                [0],
+                [0],
+                color=class_color(n),
+                lw=3,
+                label=f"{n} ({legend_counts[n]})" if legend_counts and n in legend_counts else n,
+            )
+            for n in labels
+        ]
         fig.legend(handles=handles, loc="lower center", ncol=min(len(handles), 6), frameon=False)
     if title:
         fig.suptitle(title)

@@ -739,8 +739,9 @@ def load_synth(out_dir: str | Path) -> tuple[PointCloud, list[dict[str, Any]], d
         try:
             eye = np.asarray(trajectory[0], dtype=np.float64)[:3, 3]
         except (TypeError, ValueError, IndexError) as err:
-            raise CorruptFileError(folder / "scene.json", "'trajectory' should hold 4 x 4 "
-                                   "camera poses") from err
+            raise CorruptFileError(
+                folder / "scene.json", "'trajectory' should hold 4 x 4 camera poses"
+            ) from err
         meta: dict[str, Any] = {"sensor_position": eye.tolist()}
         grid = scene.get("intrinsics") or {}
         if "pixel" in cloud.fields and "grid_width" in grid and "grid_height" in grid:

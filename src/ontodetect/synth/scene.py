@@ -86,8 +86,11 @@ class OrientedBox:
         return np.all(np.abs(local) <= half, axis=1)
 
     def to_dict(self) -> dict[str, Any]:
-        return {"center": [float(v) for v in self.center],
-                "size": [float(v) for v in self.size], "yaw": float(self.yaw)}
+        return {
+            "center": [float(v) for v in self.center],
+            "size": [float(v) for v in self.size],
+            "yaw": float(self.yaw),
+        }
 
 
 @dataclass
@@ -175,8 +178,9 @@ class Scene:
     seed: int
     extra: dict[str, Any] = field(default_factory=dict)
 
-    def combined_mesh(self) -> tuple[NDArray[np.float64], NDArray[np.int32],
-                                     NDArray[np.int32], NDArray[np.uint8]]:
+    def combined_mesh(
+        self,
+    ) -> tuple[NDArray[np.float64], NDArray[np.int32], NDArray[np.int32], NDArray[np.uint8]]:
         """All objects as one mesh.
 
         Returns
@@ -196,10 +200,18 @@ class Scene:
             cols.append(obj.triangle_color)
             offset += len(obj.vertices)
         if not verts:
-            return (np.zeros((0, 3)), np.zeros((0, 3), np.int32), np.zeros(0, np.int32),
-                    np.zeros((0, 3), np.uint8))
-        return (np.concatenate(verts), np.concatenate(tris).astype(np.int32),
-                np.concatenate(inst), np.concatenate(cols))
+            return (
+                np.zeros((0, 3)),
+                np.zeros((0, 3), np.int32),
+                np.zeros(0, np.int32),
+                np.zeros((0, 3), np.uint8),
+            )
+        return (
+            np.concatenate(verts),
+            np.concatenate(tris).astype(np.int32),
+            np.concatenate(inst),
+            np.concatenate(cols),
+        )
 
     def object(self, instance_id: int) -> SceneObject:
         """The object with this instance id."""
