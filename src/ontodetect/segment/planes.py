@@ -35,6 +35,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 from .._progress import progress
+from .._transforms import canonical_sign
 from ..errors import InvalidParameterError
 
 __all__ = [
@@ -235,8 +236,9 @@ class PlaneModel:
 
         The plane passes through the points' centroid; its normal is the direction
         of least spread (the last right-singular vector of the centred points). Of
-        the two opposite normals the one whose largest component is positive is
-        returned, so that a horizontal plane's normal points up.
+        the two opposite normals the one :func:`canonical_sign` keeps is returned (the
+        largest component positive, ties going to z, then y, then x), so that a
+        horizontal plane's normal points up.
 
         Parameters
         ----------
@@ -258,8 +260,7 @@ class PlaneModel:
         if degenerate:
             return None
         normal = vectors[:, 0]
-        if normal[np.argmax(np.abs(normal))] < 0:
-            normal = -normal
+        normal = canonical_sign(normal) * normal
         return cls(normal, -float(normal @ centroid))
 
     def signed_distance(self, points: ArrayLike) -> NDArray[np.float64]:
@@ -778,7 +779,7 @@ def _describe(
     else:
         side = float(normal @ (centroid - cluster_centroid))
         # A plane through the cluster's centroid has no outside: fall back on the sign rule.
-        flip = side < 0 if side != 0.0 else normal[np.argmax(np.abs(normal))] < 0
+        flip = side < 0 if side != 0.0 else canonical_sign(normal) < 0
     if flip:
         normal = -normal
     distance = centered @ normal
@@ -786,9 +787,8 @@ def _describe(
     axes, uv, extent = _rectangle_frame(centered, vectors[:, :0:-1].T, rng)
     if extent[1] > extent[0]:
         axes, extent, uv = axes[::-1].copy(), extent[::-1], uv[:, ::-1]
-    # Deterministic signs: the largest component of axes[0] positive, right-handed frame.
-    if axes[0, np.argmax(np.abs(axes[0]))] < 0:
-        axes[0] = -axes[0]
+    # Deterministic signs: axes[0] oriented by the one sign rule, right-handed frame.
+    axes[0] = canonical_sign(axes[0]) * axes[0]
     axes[1] = np.cross(normal, axes[0])
     length, width = float(extent[0]), float(extent[1])
 
