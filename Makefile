@@ -1,9 +1,12 @@
-# Two commands on a fresh machine: `make demo` and `make test`. Each installs what it needs.
+# Two commands on a fresh machine: `make demo` and `make test`. Each installs what it needs,
+# from the lock file (requirements.lock): exact versions with hashes.
 VENV ?= .venv
 PY := $(VENV)/bin/python
 OUT ?= demo-output
+# The tool that writes the lock, pinned like everything else.
+UV_VERSION := 0.13.9
 
-.PHONY: setup demo test lint format bench clean
+.PHONY: setup demo test lint format bench lock clean
 
 setup:
 	@bash scripts/bootstrap.sh
@@ -12,19 +15,29 @@ demo: setup
 	$(VENV)/bin/ontodetect demo -o $(OUT)
 
 test: setup
-	$(VENV)/bin/ruff check src tests benchmarks
+	$(VENV)/bin/ruff check src tests benchmarks scripts
+	$(VENV)/bin/ruff format --check src tests benchmarks scripts
 	$(PY) -m pytest -q -p no:cacheprovider
 
 lint: setup
-	$(VENV)/bin/ruff check src tests benchmarks
-	$(VENV)/bin/ruff format --check src tests benchmarks
+	$(VENV)/bin/ruff check src tests benchmarks scripts
+	$(VENV)/bin/ruff format --check src tests benchmarks scripts
 
 format: setup
-	$(VENV)/bin/ruff format src tests benchmarks
-	$(VENV)/bin/ruff check --fix src tests benchmarks
+	$(VENV)/bin/ruff format src tests benchmarks scripts
+	$(VENV)/bin/ruff check --fix src tests benchmarks scripts
 
 bench: setup
 	$(PY) -m benchmarks all
+
+# Refresh requirements.lock from pyproject.toml's ranges (the newest versions they admit, for
+# every platform and Python the package supports), then reinstall from it.
+lock: setup
+	$(PY) -m pip install -q "uv==$(UV_VERSION)"
+	printf 'setuptools>=77\nwheel\n' | $(VENV)/bin/uv pip compile pyproject.toml - \
+		--extra dev --universal --generate-hashes --python-version 3.10 \
+		--no-header --quiet -o requirements.lock
+	@bash scripts/bootstrap.sh
 
 clean:
 	rm -rf $(VENV) $(OUT) build *.egg-info src/*.egg-info

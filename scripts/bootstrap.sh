@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Prepare everything ontodetect needs on a fresh machine: the system library Open3D loads
-# (libusb-1.0), a virtual environment in .venv, and the package with its dev extras.
-# Safe to run again: it only reinstalls when pyproject.toml has changed.
+# (libusb-1.0), a virtual environment in .venv, and the package with its dev extras, every
+# dependency at the exact version and hash requirements.lock gives (`make lock` refreshes it).
+# Safe to run again: it only reinstalls when pyproject.toml or the lock has changed.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 cd "$here"
@@ -31,13 +32,18 @@ if [ ! -x "$VENV/bin/python" ]; then
     "$PYTHON" -m venv "$VENV"
 fi
 
-# 3. The package and its development tools, reinstalled only when the metadata changed.
+# 3. Dependencies from the lock (exact versions, hashes checked), then the package itself
+#    without resolving anything again; reinstalled only when the metadata or the lock changed.
 stamp="$VENV/.ontodetect-installed"
-want=$(sha256sum pyproject.toml | cut -d' ' -f1)
+want=$(cat pyproject.toml requirements.lock | sha256sum | cut -d' ' -f1)
 if [ ! -f "$stamp" ] || [ "$(cat "$stamp")" != "$want" ]; then
-    say "installing ontodetect and its dependencies into $VENV"
-    "$VENV/bin/python" -m pip install -q --disable-pip-version-check --upgrade pip
-    "$VENV/bin/python" -m pip install -q --disable-pip-version-check -e ".[dev]"
+    say "installing the locked dependencies into $VENV (requirements.lock)"
+    "$VENV/bin/python" -m pip install -q --disable-pip-version-check --require-hashes -r requirements.lock
+    say "installing ontodetect into $VENV"
+    "$VENV/bin/python" -m pip install -q --disable-pip-version-check --no-deps \
+        --no-build-isolation -e .
+    "$VENV/bin/python" -m pip check >/dev/null || {
+        say "the installed packages do not fit together:"; "$VENV/bin/python" -m pip check; exit 1; }
     echo "$want" > "$stamp"
 fi
 "$VENV/bin/python" -c "import open3d, ontodetect" >/dev/null
