@@ -36,6 +36,7 @@ from __future__ import annotations
 import functools
 import math
 import os
+from collections import Counter
 from collections.abc import Collection, Sequence
 from dataclasses import dataclass, field
 from importlib import resources
@@ -116,11 +117,26 @@ _GLAZED_CHANCE = {"open_plan": 1.0, "office": 0.5, "living_room": 0.5, "conferen
 _CURTAIN_ROOMS = ("living_room", "bedroom", "open_plan", "office", "dining", "conference")
 #: At most this many pieces of furniture per room (keeps a scan at 50,000 points fast).
 MAX_OBJECTS = 60
+#: Furnishing is retried (up to _FURNISH_ATTEMPTS times) until a room holds this much;
+#: otherwise the attempt closest to it is kept.
+_MIN_COUNTS: dict[str, dict[str, int]] = {
+    "office": {"desk": 2, "chair": 2},
+    "conference": {"table": 1, "chair": 6},
+    "classroom": {"chair": 8},
+    "dining": {"table": 1, "chair": 4},
+    "living_room": {"sofa": 1, "table": 1, "chair": 1},
+    "bedroom": {"bed": 1, "nightstand": 1},
+    "bathroom": {"toilet": 1, "sink": 1},
+    "kitchen": {"counter": 2, "chair": 1},
+    "open_plan": {"sofa": 1, "table": 2, "chair": 4},
+}
+_FURNISH_ATTEMPTS = 4
 #: Voxel size (metres) of the surface test between objects whose boxes overlap.
 SURFACE_VOXEL = 0.02
-#: Surface samples per square metre for that test (1 cm spacing).
+#: Surface samples per square metre for that test (1 cm spacing), at most _MAX_SAMPLES.
 _SAMPLES_PER_M2 = 10_000
-_MAX_SAMPLES = 80_000
+_MAX_SAMPLES = 40_000
+_MAX_VERTEX_SAMPLES = 5_000
 #: Horizontal triangles (|normal z| above this) make tops and seats.
 _HORIZONTAL = 0.9
 #: Placement attempts per object.
@@ -274,31 +290,53 @@ class _Item:
     open_below: bool = False
     on: int | None = None  # index of the object it lies on
     ignore_keepouts: bool = False
+    samples: NDArray[np.float64] | None = None  # surface points in the object frame
     _voxels: NDArray[np.int64] | None = field(default=None, repr=False)
 
     def voxels(self) -> NDArray[np.int64]:
         """Sorted unique keys of the 2 cm voxels the object's surface passes through."""
         if self._voxels is None:
-            self._voxels = _surface_voxels(self.obj.vertices, self.obj.triangles)
+            pose = self.obj.pose
+            if self.samples is None:
+                local = _surface_samples(
+                    (self.obj.vertices - pose[:3, 3]) @ pose[:3, :3], self.obj.triangles
+                )
+            else:
+                local = self.samples
+            self._voxels = _voxel_keys(local @ pose[:3, :3].T + pose[:3, 3])
         return self._voxels
 
 
-def _surface_voxels(vertices: NDArray, triangles: NDArray) -> NDArray[np.int64]:
+def _surface_samples(vertices: NDArray, triangles: NDArray) -> NDArray[np.float64]:
+    """(n, 3) points spread over the surface (1 cm apart on average) plus the vertices."""
     v = vertices[triangles]
     area = np.linalg.norm(np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1) / 2
     total = float(area.sum())
     if total <= 0:
-        points = vertices
-    else:
-        n = int(np.clip(total * _SAMPLES_PER_M2, 200, _MAX_SAMPLES))
-        rng = np.random.default_rng(0)  # the same object always gives the same voxels
-        tri = rng.choice(len(triangles), n, p=area / total)
-        r = rng.random((n, 2))
-        flip = r.sum(axis=1) > 1
-        r[flip] = 1 - r[flip]
-        t = v[tri]
-        points = t[:, 0] + r[:, :1] * (t[:, 1] - t[:, 0]) + r[:, 1:] * (t[:, 2] - t[:, 0])
-        points = np.concatenate([points, vertices])
+        return np.asarray(vertices, dtype=np.float64)
+    n = int(np.clip(total * _SAMPLES_PER_M2, 200, _MAX_SAMPLES))
+    rng = np.random.default_rng(0)  # the same object always gives the same samples
+    tri = rng.choice(len(triangles), n, p=area / total)
+    r = rng.random((n, 2))
+    flip = r.sum(axis=1) > 1
+    r[flip] = 1 - r[flip]
+    t = v[tri]
+    points = t[:, 0] + r[:, :1] * (t[:, 1] - t[:, 0]) + r[:, 1:] * (t[:, 2] - t[:, 0])
+    # The vertices too (thin parts have little area), at most _MAX_VERTEX_SAMPLES of them.
+    step = max(1, len(vertices) // _MAX_VERTEX_SAMPLES)
+    return np.concatenate([points, vertices[::step]])
+
+
+@functools.lru_cache(maxsize=256)
+def _model_samples(entry: CatalogEntry) -> NDArray[np.float64]:
+    mesh = load_model(entry)
+    samples = _surface_samples(mesh.vertices, mesh.triangles)
+    samples.flags.writeable = False
+    return samples
+
+
+def _voxel_keys(points: NDArray[np.float64]) -> NDArray[np.int64]:
+    """Sorted unique keys of the SURFACE_VOXEL cells holding the (n, 3) points."""
     ijk = np.floor(points / SURFACE_VOXEL).astype(np.int64) + (1 << 19)
     return np.unique((ijk[:, 0] << 42) | (ijk[:, 1] << 21) | ijk[:, 2])
 
@@ -352,7 +390,13 @@ def _model_item(entry: CatalogEntry, family: _Family) -> _Item:
             "license": entry.license,
         },
     )
-    return _Item(obj, top=top, seat=seat, open_below=cls in _OPEN_BELOW_CLASSES)
+    return _Item(
+        obj,
+        top=top,
+        seat=seat,
+        open_below=cls in _OPEN_BELOW_CLASSES,
+        samples=_model_samples(entry),
+    )
 
 
 def _mesh_item(
@@ -397,6 +441,7 @@ def _moved(item: _Item, x: float, y: float, yaw: float, z: float = 0.0) -> _Item
         seat=item.seat,
         open_below=item.open_below,
         ignore_keepouts=item.ignore_keepouts,
+        samples=item.samples,
     )
 
 
@@ -1198,10 +1243,21 @@ def furnished_scene(
     )
     glazed = "glazed_wall" in chosen and bool(rng.random() < _GLAZED_CHANCE.get(room_type, 0.0))
     shell = build_shell(room_type, rng, size, glazed_wall=glazed)
-    room = _Room(rng, room_type, size, library, shell.keepouts, shell.openings, chosen)
-    room.curtains()
-    _PROGRAMS[room_type](room)
-    room.radiators()
+    wanted = _MIN_COUNTS[room_type]
+    room = best = None
+    best_score = -1
+    for _attempt in range(_FURNISH_ATTEMPTS):
+        room = _Room(rng, room_type, size, library, shell.keepouts, shell.openings, chosen)
+        room.curtains()
+        _PROGRAMS[room_type](room)
+        room.radiators()
+        counts = Counter(item.obj.class_name for item in room.items)
+        score = sum(min(counts[c], n) for c, n in wanted.items())
+        if score > best_score:
+            best, best_score = room, score
+        if score == sum(wanted.values()):
+            break
+    room = best
     objects = [
         _with_id(o, i + 1)
         for i, o in enumerate(shell.structure + [item.obj for item in room.items])
