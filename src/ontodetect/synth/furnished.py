@@ -906,15 +906,17 @@ def _storage(room: _Room, families: Sequence[str], n: int) -> None:
         room.against_wall(room.model(*families))
 
 
-def _sitting_group(room: _Room, region: tuple[float, float, float, float] | None = None) -> None:
-    """A sofa facing a coffee table, easy chairs (side by side) across or beside it."""
+def _sitting_group(
+    room: _Room, region: tuple[float, float, float, float] | None = None
+) -> int | None:
+    """A sofa facing a coffee table, easy chairs (side by side) across it; the sofa's index."""
     sofa = (
         room.against_wall(room.model("sofa", "sofa-corner"))
         if region is None
         else room.free(room.model("sofa"), region=region)
     )
     if sofa is None:
-        return
+        return None
     s = room.items[sofa].obj
     room.seat_clutter(sofa, 0.8)
     table = room.model("table-coffee")
@@ -931,7 +933,7 @@ def _sitting_group(room: _Room, region: tuple[float, float, float, float] | None
     # Easy chairs across the coffee table, facing the sofa, side by side.
     first = room.model(*_EASY_CHAIRS)
     if first is None:
-        return
+        return sofa
     n = int(room.rng.integers(1, 3))
     gap = room.uniform(0.0, 0.05) if room.has("side_by_side") else room.uniform(0.3, 0.8)
     w = first.obj.dimensions["width"]
@@ -948,6 +950,7 @@ def _sitting_group(room: _Room, region: tuple[float, float, float, float] | None
         room.seat_clutter(i, 0.5)
     if table_index is not None and room.chance(0.5):
         room.on_top(table_index, room.model("plant-small", "books"))
+    return sofa
 
 
 def _office(room: _Room) -> None:
@@ -1031,7 +1034,12 @@ def _dining(room: _Room) -> None:
 
 
 def _living_room(room: _Room) -> None:
-    _sitting_group(room)
+    sofa = _sitting_group(room)
+    if room.chance(0.5):
+        side = room.beside(sofa, room.model("table-side", "nightstand"), gap=room.uniform(0.0, 0.1))
+        room.on_top(side, room.model("lamp-table", "plant-small"))
+    if room.chance(0.3):
+        room.free(room.model("ottoman", "stool-low"))
     stand = room.against_wall(room.model("tv-stand"))
     if stand is not None:
         room.on_top(stand, room.model("television"))
@@ -1053,6 +1061,8 @@ def _bedroom(room: _Room) -> None:
         if room.has("seat_clutter") and room.chance(0.5):
             room.on_seat(bed, room.model("clothes", "bag") or _clothes_item(room.rng))
     room.against_wall(room.model("wardrobe"))
+    if bed is not None and room.chance(0.3):
+        room.free(room.model("bench", "ottoman"))
     dresser = room.against_wall(room.model("dresser"))
     if dresser is not None and room.chance(0.5):
         room.on_top(dresser, room.model("lamp-table", "plant-small"))
@@ -1066,7 +1076,9 @@ def _bedroom(room: _Room) -> None:
 
 
 def _bathroom(room: _Room) -> None:
-    room.against_wall(room.model("bathtub", "shower"), corner=True)
+    tub = room.against_wall(room.model("bathtub", "shower"), corner=True)
+    if tub is not None and room.items[tub].obj.class_name == "bathtub" and room.chance(0.4):
+        room.beside(tub, room.model("shower-curtain"), gap=0.0)
     room.against_wall(room.model("toilet"))
     sink = room.against_wall(room.model("sink", "sink-vanity"))
     if sink is not None and room.chance(0.3):
