@@ -381,6 +381,10 @@ def test_attribution_lists_models_and_licences(rooms):
     used = Counter(o.extra["model_id"] for o in furniture(scene) if "model_id" in o.extra)
     assert {m["model_id"]: m["count"] for m in credits[0]["models"]} == dict(used)
     assert scene.extra["attribution"] == credits
+    # The sofa carries its own licence; the other models the catalogue's.
+    assert credits[0]["license"] == "Creative Commons Attribution 3.0 license; Public domain"
+    sofa = next(m for m in credits[0]["models"] if m["model_id"] == "Scopia#beige_sofa")
+    assert sofa["license"] == "Public domain"
     assert attribution_text(scene).startswith("Test catalogue (")
 
 

@@ -707,7 +707,6 @@ class _Room:
         """Up to ``count`` chairs of one model round a table, spaced along its long sides."""
         if table is None:
             return []
-        t = self.items[table].obj
         top = self.items[table].top
         x0, y0, x1, y1 = top.rect if top is not None else (-0.5, -0.5, 0.5, 0.5)
         first = self.model(*families)
@@ -730,7 +729,6 @@ class _Room:
             i = self.seat_at(table, first, edge, normal, tucked=tucked)
             if i is not None:
                 placed.append(i)
-        del t
         return placed
 
     def chair_at_desk(self, desk: int | None, families: Sequence[str]) -> int | None:
@@ -989,11 +987,9 @@ def _classroom(room: _Room) -> None:
     room.against_wall(room.model("whiteboard"), walls=[0])
     teacher = room.free(room.model("desk"), region=(0.5, 0.6, room.L - 0.5, 1.9), yaw=np.pi)
     if teacher is not None:
-        t = room.items[teacher].obj
         top = room.items[teacher].top
         y0 = top.rect[1] if top is not None else -0.3
         room.seat_at(teacher, room.model(*_WORK_CHAIRS), (0.0, y0), (0.0, -1.0), tucked=False)
-        del t
     rows = int((room.W - 2.6) // 1.5)
     cols = int((room.L - 1.0) // 1.6)
     for r in range(rows):
@@ -1067,8 +1063,7 @@ def _bedroom(room: _Room) -> None:
     if dresser is not None and room.chance(0.5):
         room.on_top(dresser, room.model("lamp-table", "plant-small"))
     if room.chance(0.6):
-        desk = _desk_group(room)
-        del desk
+        _desk_group(room)
     else:
         chair = room.against_wall(room.model("chair-dining", *_EASY_CHAIRS))
         room.seat_clutter(chair, 0.7)
@@ -1134,8 +1129,7 @@ def _kitchen(room: _Room) -> None:
         island = room.free(room.model("counter-island"))
         if island is not None:
             for _ in range(int(room.rng.integers(1, 4))):
-                stool = room.chair_at_desk(island, ("stool-bar",))
-                del stool
+                room.chair_at_desk(island, ("stool-bar",))
             return
     table = room.free(room.model("table-dining"), tries=20)
     chairs = room.chairs_around(table, _DINING_CHAIRS, int(room.rng.integers(2, 5)))
@@ -1307,8 +1301,9 @@ def attribution(scene: Scene) -> list[dict[str, Any]]:
     Returns
     -------
     list of dict
-        One per catalogue, sorted by name: ``catalog``, ``license`` and ``models``, a
-        list of ``{"model_id", "model_name", "creator", "count"}`` sorted by id.
+        One per catalogue, sorted by name: ``catalog``, ``license`` (the models' licences,
+        joined by "; " when they differ) and ``models``, a list of ``{"model_id",
+        "model_name", "creator", "license", "count"}`` sorted by id.
 
     Examples
     --------
@@ -1321,23 +1316,29 @@ def attribution(scene: Scene) -> list[dict[str, Any]]:
         e = obj.extra
         if "model_id" not in e:
             continue
-        cat = found.setdefault(
-            e["catalog"], {"catalog": e["catalog"], "license": e["license"], "models": {}}
-        )
-        m = cat["models"].setdefault(
+        models = found.setdefault(e["catalog"], {})
+        m = models.setdefault(
             e["model_id"],
             {
                 "model_id": e["model_id"],
                 "model_name": e["model_name"],
                 "creator": e["creator"],
+                "license": e["license"],
                 "count": 0,
             },
         )
         m["count"] += 1
-    return [
-        {**c, "models": [c["models"][k] for k in sorted(c["models"])]}
-        for _, c in sorted(found.items())
-    ]
+    out = []
+    for catalog, models in sorted(found.items()):
+        licences = sorted({m["license"] for m in models.values()})
+        out.append(
+            {
+                "catalog": catalog,
+                "license": licences[0] if len(licences) == 1 else "; ".join(licences),
+                "models": [models[k] for k in sorted(models)],
+            }
+        )
+    return out
 
 
 def attribution_text(scene: Scene) -> str:
