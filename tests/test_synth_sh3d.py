@@ -426,11 +426,18 @@ def test_room_types_and_challenges_are_listed():
 
 def test_cli_furnished(tmp_path, catalog_dir, capsys):
     out = tmp_path / "out"
-    args = ["synth", "--room", "living_room", "--catalog", str(catalog_dir), "--points", "2000"]
-    code = main([*args, "--sensor", "rgbd-frame", "-o", str(out)])
+    quick = ["--catalog", str(catalog_dir), "-O", "num_frames=2", "-O", "stride=16"]
+    code = main(["synth", "--room", "living_room", *quick, "-o", str(out)])
     captured = capsys.readouterr()
     assert code == 0, captured.err
     assert json.loads((out / "scene.json").read_text())["scene_extra"]["furnished"]
+    code = main(
+        ["synth", "--room", "dining,office", "--count", "2", "--seed", "4", *quick, "-o", str(out)]
+    )
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert code == 0 and len(lines) == 2
+    seeds = [json.loads((out / f"scene_{i:04d}" / "scene.json").read_text()) for i in (0, 1)]
+    assert [(d["room_type"], d["seed"]) for d in seeds] == [("dining", 4), ("office", 5)]
     code = main(["synth", "--room", "attic", "--furnished", "-o", str(out)])
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1 and "attic" in err[0]
