@@ -548,6 +548,12 @@ class _Room:
         self._rows = np.vstack([self._rows, _box_rows([item.obj.box])])
         return len(self.items) - 1
 
+    def remove_last(self) -> None:
+        """Take back the object placed last."""
+        self.items.pop()
+        self._rows = self._rows[:-1]
+        self.wall_of.pop(len(self.items), None)
+
     def try_add(self, item: _Item, ignore: Collection[int] = ()) -> int | None:
         if self.full() or not self.fits(item, ignore):
             return None
@@ -899,6 +905,37 @@ def _desk_group(room: _Room, walls: Sequence[int] | None = None) -> int | None:
     return desk
 
 
+def _pair(room: _Room, item: _Item | None) -> list[int]:
+    """Two of ``item`` side by side: against a wall if one has room, else free-standing.
+
+    With the ``side_by_side`` challenge they stand 0-5 cm apart, else 30-60 cm.
+    """
+    if item is None:
+        return []
+    gap = room.uniform(0.0, 0.05) if room.has("side_by_side") else room.uniform(0.3, 0.6)
+    for _ in range(4):
+        first = room.against_wall(item, tries=8)
+        if first is None:
+            break
+        second = room.beside(first, item, gap=gap)
+        if second is not None:
+            return [first, second]
+        room.remove_last()
+    step = item.obj.dimensions["width"] + gap
+    for _ in range(_TRIES // 3):
+        first = room.free(item, tries=1)
+        if first is None:
+            continue
+        a = room.items[first].obj
+        for side in (1.0, -1.0):
+            x, y = _local_to_world(a, side * step, 0.0)
+            second = room.try_add(_moved(item, x, y, a.yaw))
+            if second is not None:
+                return [first, second]
+        room.remove_last()
+    return []
+
+
 def _storage(room: _Room, families: Sequence[str], n: int) -> None:
     for _ in range(n):
         room.against_wall(room.model(*families))
@@ -955,13 +992,9 @@ def _office(room: _Room) -> None:
     for _ in range(int(room.rng.integers(2, 5))):
         _desk_group(room)
     _storage(room, ("bookshelf", "shelves", "cabinet"), int(room.rng.integers(1, 3)))
-    if room.chance(0.6):  # visitors' easy chairs, side by side
-        first = room.model("armchair-club", "chair-dining", "lounge-chair")
-        a = room.against_wall(first)
-        gap = 0.02 if room.has("side_by_side") else room.uniform(0.3, 0.6)
-        b = room.beside(a, first, gap=gap)
-        room.seat_clutter(a, 0.4)
-        room.seat_clutter(b, 0.4)
+    if room.chance(0.7):  # visitors' easy chairs, side by side
+        for i in _pair(room, room.model("armchair-club", "lounge-chair", "chair-dining")):
+            room.seat_clutter(i, 0.4)
     for _ in range(int(room.rng.integers(1, 3))):
         room.in_corner(room.model("plant", "bin"))
     if room.chance(0.3):
@@ -1044,8 +1077,8 @@ def _living_room(room: _Room) -> None:
     for _ in range(int(room.rng.integers(1, 3))):
         room.in_corner(room.model("plant"))
     if room.chance(0.5):
-        lone = room.in_corner(room.model(*_EASY_CHAIRS))
-        room.seat_clutter(lone, 0.5)
+        for i in _pair(room, room.model(*_EASY_CHAIRS)):
+            room.seat_clutter(i, 0.5)
 
 
 def _bedroom(room: _Room) -> None:
