@@ -180,7 +180,8 @@ class Scene:
     ----------
     room_type : str
         ``"office"``, ``"conference"``, ``"living_room"``, ``"home_office"``,
-        ``"dining_room"``, ``"bedroom"``, ``"kitchen"``, ``"corridor"``.
+        ``"dining_room"``, ``"bedroom"``, ``"kitchen"``, ``"corridor"``; or one of
+        :data:`~ontodetect.synth.furnished.FURNISHED_ROOM_TYPES` for furnished rooms.
     size : (3,) float
         Room length (x), width (y) and height (z) in metres; the room spans
         ``[0, size[0]] x [0, size[1]] x [0, size[2]]``.
