@@ -1115,21 +1115,21 @@ def _bathroom(room: _Room) -> None:
     room.in_corner(room.model("bin"))
 
 
-def _kitchen_run(room: _Room, k: int, start_corner: bool = True) -> list[int]:
-    """Base cabinets, sink, cooker and fridge along wall ``k``, wall cabinets above some."""
+def _kitchen_run(
+    room: _Room, k: int, start_corner: bool = True, *, with_sink: bool = True
+) -> list[int]:
+    """Base cabinets, a sink, a cooker and a fridge along wall ``k``, wall cabinets above some."""
     length = room.wall_length(k)
     u = 0.0 if start_corner else room.uniform(0.0, 0.6)
     placed: list[int] = []
-    sink_done = False
+    sink_done = not with_sink
     fridge = room.model("refrigerator")
     while u < length - 0.4 and not room.full():
-        if not sink_done and placed and room.chance(0.5):
+        item = None
+        if not sink_done and placed and (room.chance(0.5) or len(placed) >= 2):
             item = room.model("sink-kitchen")
-            sink_done = item is not None
-        elif placed and room.chance(0.25):
+        if item is None and placed and room.chance(0.25):
             item = room.model("appliance")
-        else:
-            item = room.model("counter")
         if item is None:
             item = room.model("counter")
         if item is None:
@@ -1142,6 +1142,7 @@ def _kitchen_run(room: _Room, k: int, start_corner: bool = True) -> list[int]:
             u += 0.1
             continue
         placed.append(i)
+        sink_done = sink_done or room.items[i].obj.kind == "sink-kitchen"
         if room.chance(0.5):
             upper = room.model("cabinet-wall")
             if upper is not None and upper.obj.dimensions["width"] <= w + 0.3:
@@ -1157,7 +1158,7 @@ def _kitchen(room: _Room) -> None:
     k = room.pick(walls)
     _kitchen_run(room, k)
     if room.chance(0.5):
-        _kitchen_run(room, (k + 1) % 4, start_corner=False)
+        _kitchen_run(room, (k + 1) % 4, start_corner=False, with_sink=False)
     if room.chance(0.5):
         island = room.free(room.model("counter-island"))
         if island is not None:
