@@ -10,6 +10,7 @@ import yaml
 
 from ..errors import InvalidParameterError
 from ..synth import SENSORS, room_types, sensor_options, synthesize, synthesize_many, write_synth
+from ..synth.furnished import FURNISHED_ROOM_TYPES, synthesize_furnished
 from . import app
 from ._console import console, reporting
 
@@ -66,12 +67,26 @@ def synth(
         metavar="NAME=VALUE",
         help="Sensor option, e.g. -O stride=2 -O drift=0.01 -O 'noise=[0.001, 0.002]'.",
     ),
+    furnished: bool = typer.Option(
+        False,
+        "--furnished",
+        help="Furnish the room with Sweet Home 3D catalogue models instead of parametric "
+        "furniture (room types: see --list --furnished).",
+    ),
+    catalog: Path | None = typer.Option(
+        None,
+        "--catalog",
+        help="Folder of Sweet Home 3D catalogues (*.sh3f) for --furnished (implies it); "
+        "default $ONTODETECT_SH3D_DIR or /usr/share/sweethome3d/furniture.",
+    ),
     list_: bool = typer.Option(False, "--list", help="List room types and sensors, then exit."),
 ) -> None:
     """Simulate scans of furnished rooms with per-point ground truth (cloud.ply, objects.json,
     scene.json, mesh.ply)."""
+    furnished = furnished or catalog is not None
     if list_:
-        console.print("[bold]room types[/]: " + ", ".join(room_types()))
+        kinds = FURNISHED_ROOM_TYPES if furnished else room_types()
+        console.print("[bold]room types[/]: " + ", ".join(kinds))
         console.print("[bold]sensors[/]:")
         for name in SENSORS:
             console.print(f"  {name:<11} {_SENSOR_HELP[name]}")
@@ -81,6 +96,9 @@ def synth(
         raise InvalidParameterError("out", "a folder given with -o/--out", None)
     rooms = [r.strip() for r in room.split(",") if r.strip()]
     options = _parse_options(option)
+    if furnished:
+        _synth_furnished(rooms, sensor, seed, count, out, points, catalog, object_meshes, options)
+        return
     if count == 1 and len(rooms) == 1:
         with reporting():
             result = synthesize(rooms[0], sensor, seed, points=points, clutter=clutter, **options)
@@ -104,3 +122,35 @@ def synth(
             on_scene=show,
             **options,
         )
+
+
+def _synth_furnished(
+    rooms: list[str],
+    sensor: str,
+    seed: int,
+    count: int,
+    out: Path,
+    points: int | None,
+    catalog: Path | None,
+    object_meshes: bool,
+    options: dict[str, Any],
+) -> None:
+    """Furnished rooms: one scene in OUT, or OUT/scene_0000... with --count."""
+    for name in rooms:
+        if name not in FURNISHED_ROOM_TYPES:
+            raise InvalidParameterError("room", f"one of {', '.join(FURNISHED_ROOM_TYPES)}", name)
+    if count < 1:
+        raise InvalidParameterError("count", "a positive integer", count)
+    with reporting():
+        for i in range(count):
+            result = synthesize_furnished(
+                rooms[i % len(rooms)],
+                sensor,
+                seed + i,
+                catalog_dir=catalog,
+                points=points,
+                **options,
+            )
+            folder = out if count == 1 else out / f"scene_{i:04d}"
+            write_synth(result, folder, object_meshes=object_meshes)
+            console.print(f"{folder}: {result.summary()}", markup=False, soft_wrap=True)

@@ -5,6 +5,10 @@
 - :mod:`~ontodetect.synth.sensors`: RGB-D camera, laser scanner, monocular SLAM.
 - :mod:`~ontodetect.synth.dataset`: :func:`synthesize`, :func:`write_synth`,
   :func:`load_synth`, :func:`synthesize_many`.
+- :mod:`~ontodetect.synth.sh3d`: Sweet Home 3D furniture catalogues (:func:`read_catalog`,
+  :func:`load_model`).
+- :mod:`~ontodetect.synth.furnished`: rooms furnished with catalogue models
+  (:func:`furnished_scene`, :data:`FURNISHED_ROOM_TYPES`, :func:`attribution`).
 """
 
 from __future__ import annotations
@@ -37,6 +41,7 @@ from .sensors import (
 __all__ = [
     "CLASS_IDS",
     "CLASS_NAMES",
+    "FURNISHED_ROOM_TYPES",
     "ROOM_TYPES",
     "SENSORS",
     "SYNTH_FORMAT",
@@ -46,8 +51,10 @@ __all__ = [
     "SceneObject",
     "SensorOutput",
     "SynthResult",
+    "attribution",
     "build_room",
     "camera_trajectory",
+    "furnished_scene",
     "load_synth",
     "room_types",
     "scan_monocular_slam",
@@ -56,10 +63,14 @@ __all__ = [
     "scan_tls",
     "sensor_options",
     "synthesize",
+    "synthesize_furnished",
     "synthesize_many",
     "tls_stations",
     "write_synth",
 ]
+
+
+_FURNISHED = ("FURNISHED_ROOM_TYPES", "attribution", "furnished_scene", "synthesize_furnished")
 
 
 def __getattr__(name: str) -> Any:
@@ -69,4 +80,8 @@ def __getattr__(name: str) -> Any:
         from . import rooms
 
         return getattr(rooms, name)
+    if name in _FURNISHED:
+        from . import furnished
+
+        return getattr(furnished, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -35,7 +35,7 @@ from . import meshes as M
 from .furniture import make_furniture, part_boxes, place
 from .scene import OrientedBox, Scene, SceneObject, yaw_pose
 
-__all__ = ["ROOM_TYPES", "build_room"]
+__all__ = ["ROOM_TYPES", "RoomShell", "build_room", "build_shell"]
 
 #: The room types :func:`build_room` knows.
 ROOM_TYPES: tuple[str, ...] = (
@@ -82,6 +82,11 @@ WINDOW_CLEARANCE = 0.3
 CEILING_CLEARANCE = 0.05
 #: Slack (metres) for "inside the room": rounding only.
 _INSIDE_SLACK = 1e-9
+#: Glazed walls: panes between mullions, glass from just above the floor to near the ceiling.
+GLAZED_PANE_WIDTH = (1.2, 1.6)
+GLAZED_MULLION = 0.08
+GLAZED_BOTTOM = 0.05
+GLAZED_TOP_GAP = 0.10
 #: Attempts at one placement before giving up on that object.
 _TRIES = 40
 #: Attempts at furnishing a room before accepting fewer objects than asked.
@@ -1217,6 +1222,109 @@ def _window(lay: _Layout, o: _Opening, t: float, pose: NDArray[np.float64]) -> S
         pieces,
         pose,
         {"width": o.u1 - o.u0, "height": o.z1 - o.z0, "sill_height": o.z0},
+    )
+
+
+def _glaze(lay: _Layout) -> int | None:
+    """Turn one wall without a door into a glazed wall (floor-to-ceiling panes); its index."""
+    doors = {o.wall for o in lay.openings if o.kind == "door"}
+    walls = [k for k in range(4) if k not in doors]
+    if not walls:
+        return None
+    windowed = [k for k in walls if any(o.wall == k for o in lay.openings)]
+    options = windowed or walls
+    k = options[int(lay.rng.integers(len(options)))]
+    lay.openings = [o for o in lay.openings if o.wall != k]
+    length = lay.wall_length(k)
+    n = max(1, round((length - 0.3) / (float(np.mean(GLAZED_PANE_WIDTH)) + GLAZED_MULLION)))
+    pane = (length - 0.3 - (n - 1) * GLAZED_MULLION) / n
+    top = lay.H - GLAZED_TOP_GAP
+    for i in range(n):
+        u0 = 0.15 + i * (pane + GLAZED_MULLION)
+        lay.openings.append(_Opening(k, "window", u0, u0 + pane, GLAZED_BOTTOM, top))
+    return k
+
+
+@dataclass(frozen=True)
+class RoomShell:
+    """An empty room: floor, ceiling, walls with their openings, doors and windows.
+
+    Attributes
+    ----------
+    room_type : str
+    size : (3,) float
+        Length (x), width (y) and height (z) in metres.
+    wall_thickness : float
+    structure : list of SceneObject
+        Floor, ceiling, four walls, then doors and windows (instance ids 0).
+    openings : list of dict
+        Each door and window: ``wall`` (0-3), ``kind``, ``u0``, ``u1`` (metres along
+        the wall from its first inner corner), ``z0``, ``z1``.
+    keepouts : (k, 7) float
+        Rows cx, cy, half x, half y, yaw, z0, z1 of the upright boxes furniture
+        must stay out of: doors' swing, the space in front of windows.
+    glazed_wall : int or None
+        The wall made of glass panes, if any.
+    """
+
+    room_type: str
+    size: tuple[float, float, float]
+    wall_thickness: float
+    structure: list[SceneObject]
+    openings: list[dict[str, Any]]
+    keepouts: NDArray[np.float64]
+    glazed_wall: int | None = None
+
+
+def build_shell(
+    room_type: str,
+    rng: np.random.Generator,
+    size: tuple[float, float, float],
+    *,
+    glazed_wall: bool = False,
+) -> RoomShell:
+    """The empty shell of a room, with doors and windows placed as :func:`build_room` does.
+
+    Parameters
+    ----------
+    room_type : str
+        Chooses how many doors and windows (offices and conference rooms may have two
+        doors, kitchens have higher sills); any name is accepted.
+    rng : numpy.random.Generator
+        Draws the wall thickness, the openings and the colours.
+    size : (3,) float
+        Length, width and height in metres.
+    glazed_wall : bool
+        Make one wall without a door a glazed wall: panes of glass (a window part named
+        ``glass``, which sensors see through) from 5 cm above the floor to 10 cm under the
+        ceiling between narrow mullions.
+
+    Returns
+    -------
+    RoomShell
+
+    Examples
+    --------
+    >>> shell = build_shell("office", np.random.default_rng(0), (5.0, 4.0, 2.7), glazed_wall=True)
+    >>> [o.class_name for o in shell.structure][:6]
+    ['floor', 'ceiling', 'wall', 'wall', 'wall', 'wall']
+    >>> shell.glazed_wall is not None
+    True
+    """
+    L, W, H = (float(v) for v in size)
+    thickness = float(rng.uniform(*WALL_THICKNESS))
+    lay = _Layout(rng, room_type, (L, W, H), 1.0)
+    _plan_openings(lay)
+    glazed = _glaze(lay) if glazed_wall else None
+    structure = _structure(lay, thickness)
+    return RoomShell(
+        room_type,
+        (L, W, H),
+        thickness,
+        structure,
+        [dataclasses.asdict(o) for o in lay.openings],
+        lay.keepouts.copy(),
+        glazed,
     )
 
 

@@ -59,6 +59,24 @@ CLASS_IDS: dict[str, int] = {
     "radiator": 106,
     "keyboard": 107,
     "closet": 108,
+    # Furnished rooms (synth.furnished): NYU40 ids where NYU40 has the class.
+    "counter": 12,
+    "curtain": 16,
+    "dresser": 17,
+    "pillow": 18,
+    "clothes": 21,
+    "refrigerator": 24,
+    "shower_curtain": 28,
+    "whiteboard": 30,
+    "nightstand": 32,
+    "toilet": 33,
+    "sink": 34,
+    "lamp": 35,
+    "bathtub": 36,
+    "bag": 37,
+    "shower": 109,
+    "appliance": 110,  # cookers, ovens, washing machines
+    "tv_stand": 111,
 }
 #: Id -> class name.
 CLASS_NAMES: dict[int, str] = {v: k for k, v in CLASS_IDS.items()}
@@ -162,7 +180,8 @@ class Scene:
     ----------
     room_type : str
         ``"office"``, ``"conference"``, ``"living_room"``, ``"home_office"``,
-        ``"dining_room"``, ``"bedroom"``, ``"kitchen"``, ``"corridor"``.
+        ``"dining_room"``, ``"bedroom"``, ``"kitchen"``, ``"corridor"``; or one of
+        :data:`~ontodetect.synth.furnished.FURNISHED_ROOM_TYPES` for furnished rooms.
     size : (3,) float
         Room length (x), width (y) and height (z) in metres; the room spans
         ``[0, size[0]] x [0, size[1]] x [0, size[2]]``.
