@@ -15,11 +15,18 @@ from importlib import resources
 from os import PathLike
 
 from ._environment import class_priors, object_prior, room_categories, room_distribution
-from ._gaussian import Gaussian
-from ._schema import (
+from ._features import (
     CLUSTER_FEATURES,
+    FEATURES,
     PART_FEATURES,
     RELATION_FEATURES,
+    Feature,
+    feature_registry,
+    register_feature,
+    sigma_floor,
+)
+from ._gaussian import Gaussian
+from ._schema import (
     ClusterRule,
     LabelModel,
     ObjectClass,
@@ -46,6 +53,7 @@ from ._score import (
 
 __all__ = [
     "CLUSTER_FEATURES",
+    "FEATURES",
     "NONE",
     "PART_FEATURES",
     "RELATION_FEATURES",
@@ -54,6 +62,7 @@ __all__ = [
     "ClusterRule",
     "ClusterScores",
     "ConstraintValue",
+    "Feature",
     "Gaussian",
     "LabelModel",
     "ObjectClass",
@@ -64,6 +73,7 @@ __all__ = [
     "class_priors",
     "cluster_log_factor",
     "continuations",
+    "feature_registry",
     "load_ontology",
     "missing_factor",
     "object_prior",
@@ -71,10 +81,12 @@ __all__ = [
     "part_values",
     "plane_feature",
     "read_ontology_file",
+    "register_feature",
     "room_categories",
     "room_distribution",
     "score_class",
     "score_cluster",
+    "sigma_floor",
 ]
 
 

@@ -27,6 +27,7 @@ from typing import Any
 import yaml
 
 from ..errors import InvalidOntologyError
+from ._features import CLUSTER_FEATURES, PART_FEATURES, RELATION_FEATURES
 from ._gaussian import Gaussian
 
 __all__ = [
@@ -46,40 +47,6 @@ __all__ = [
 
 FORMAT = "ontodetect.ontology/1"
 
-#: Plane features a part may constrain, with the factor of Eq. 3.3 each belongs to.
-PART_FEATURES: dict[str, str] = {
-    "tilt": "Or",  # degrees between the plane's normal and vertical: 0 = horizontal
-    "height": "He",  # centroid height above the floor (m)
-    "top": "He",  # highest inlier above the floor (m)
-    "bottom": "He",  # lowest inlier above the floor (m)
-    "length": "Pr",  # extent along the plane's major axis (m)
-    "width": "Pr",  # extent along its minor axis (m)
-    "area": "Pr",  # covered area (m²)
-    "fill": "De",  # covered area / (length × width): how solid the patch is
-    "density": "De",  # points per m² (depends on the sensor)
-    "points": "De",  # inlier count (depends on the sensor)
-    # Share of the plane's footprint under which the floor was seen (0..1): open below
-    # (a top on legs) or closed (a cabinet, a bed, a box hide the floor under them).
-    # Measured by detect for horizontal planes; unknown elsewhere, which costs nothing.
-    "open_below": "Pr",
-}
-#: Features of a pair of parts ``between: [a, b]``.
-RELATION_FEATURES: dict[str, str] = {
-    "angle": "angle between the normals, folded to [0, 90] degrees",
-    "distance": "closest distance between the two planes' points (m)",
-    "gap": "height of b's centroid minus a's (m)",
-    "overlap": "share of the smaller footprint the two overlap in the xy plane (0..1)",
-}
-#: Whole-cluster features.
-CLUSTER_FEATURES: dict[str, str] = {
-    "length": "longest horizontal side of the upright box (m)",
-    "breadth": "shortest horizontal side of the upright box (m)",
-    "height": "top of the cluster above the floor (m)",
-    "bottom": "lowest point above the floor (m)",
-    "planes": "number of planes found in the cluster",
-    "rise": "height of the cluster above its highest horizontal plane (m): a backrest rises "
-    "above a seat, nothing rises above a cabinet top",
-}
 #: Factor used for a part that has no plane when the file does not say.
 DEFAULT_MISSING = {True: 0.02, False: 0.3}
 
