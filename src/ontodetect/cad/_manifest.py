@@ -104,7 +104,7 @@ def load_mesh(path: str | os.PathLike[str]) -> Mesh:
     A file with vertices but no faces gives a :class:`Mesh` without triangles
     (a point set).
     """
-    import trimesh
+    import trimesh  # lazy: trimesh only to read mesh files
 
     p = Path(path)
     if not p.is_file():

@@ -34,16 +34,18 @@ import itertools
 import math
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial import cKDTree
 
 from ..errors import InvalidParameterError
 from ..preprocess import voxelize
 from ..synth import meshes as M
 from ..synth.meshes import Mesh
+
+if TYPE_CHECKING:
+    from scipy.spatial import cKDTree
 
 __all__ = [
     "MODEL_SPACING",
@@ -262,7 +264,7 @@ def visible_surface(
     """
     if len(mesh.triangles) == 0:
         return mesh
-    import open3d as o3d
+    import open3d as o3d  # lazy: open3d (0.8 s to import) only for visibility tests
 
     tris = _subdivide(mesh.vertices[mesh.triangles], max_edge)
     centre = tris.mean(axis=1)
@@ -393,6 +395,8 @@ class CadModel:
         """A k-d tree of :meth:`points` (cached): one tree serves every object fitted."""
         key = ("tree", float(spacing), seed)
         if key not in self._cache:
+            from scipy.spatial import cKDTree  # lazy: scipy.spatial off the import path
+
             self._cache[key] = cKDTree(self.points(spacing, seed))
         return self._cache[key]
 
@@ -936,8 +940,8 @@ def library_figure(
     matplotlib.figure.Figure
         Not attached to any window; save it with ``fig.savefig(path)``.
     """
-    from matplotlib.figure import Figure
-    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+    from matplotlib.figure import Figure  # lazy: matplotlib only to draw the library
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # lazy: as matplotlib
 
     chosen = list(library) if names is None else list(names)
     models = [library[n] for n in chosen]

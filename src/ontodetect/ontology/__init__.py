@@ -10,10 +10,7 @@ cluster's planes to the class's parts and returns P_obj|ont for every class and
 
 from __future__ import annotations
 
-import functools
-from importlib import resources
-from os import PathLike
-
+from ._builtin import builtin_ontology, load_ontology
 from ._environment import class_priors, object_prior, room_categories, room_distribution
 from ._features import (
     CLUSTER_FEATURES,
@@ -27,12 +24,15 @@ from ._features import (
 )
 from ._gaussian import Gaussian
 from ._schema import (
+    CAD_ROLES,
+    Attach,
     ClusterRule,
     LabelModel,
     ObjectClass,
     Ontology,
     Part,
     Relation,
+    SeedStyle,
     parse_ontology,
     read_ontology_file,
 )
@@ -52,11 +52,13 @@ from ._score import (
 )
 
 __all__ = [
+    "CAD_ROLES",
     "CLUSTER_FEATURES",
     "FEATURES",
     "NONE",
     "PART_FEATURES",
     "RELATION_FEATURES",
+    "Attach",
     "ClassScore",
     "ClusterDescription",
     "ClusterRule",
@@ -69,6 +71,7 @@ __all__ = [
     "Ontology",
     "Part",
     "Relation",
+    "SeedStyle",
     "builtin_ontology",
     "class_priors",
     "cluster_log_factor",
@@ -88,24 +91,3 @@ __all__ = [
     "score_cluster",
     "sigma_floor",
 ]
-
-
-@functools.cache
-def builtin_ontology() -> Ontology:
-    """The shipped furniture ontology: chair, sofa, table (+ stool and bench, not reported)."""
-    text = resources.files("ontodetect").joinpath("data/furniture.yaml").read_text("utf-8")
-    return parse_ontology(text, "builtin:furniture.yaml")
-
-
-def load_ontology(*paths: str | PathLike[str], replace: bool = False) -> Ontology:
-    """The built-in ontology with the classes of ``paths`` added or replacing same-named ones.
-
-    With ``replace=True`` only the files' classes are used.
-    """
-    result = None if replace else builtin_ontology()
-    for p in paths:
-        o = read_ontology_file(p)
-        result = o if result is None else result.merged(o)
-    if result is None:
-        return builtin_ontology()
-    return result
