@@ -26,6 +26,8 @@ def test_the_builtin_roles_are_those_the_code_had():
         0.8,
         0.95,
     )
+    assert a.outer_margin == 0.1 and top.low is None
+    assert (seat.low.up_to, seat.low.level, seat.low.margin) == (0.6, 0.05, 0.2)
     # labeling: chair, sofa, stool and bench profit from a table nearby.
     seating = {"chair", "sofa", "stool", "bench"}
     assert o.context_pairs() == {(s, "table") for s in seating} | {("table", s) for s in seating}

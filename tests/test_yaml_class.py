@@ -10,10 +10,10 @@ import pytest
 
 from ontodetect.cad import ModelLibrary, fit_object, hints_from_points, make_model, model_scale
 from ontodetect.cad._models import sample_surface
+from ontodetect.geometry._mesh import Mesh
 from ontodetect.ontology import builtin_ontology, load_ontology
 from ontodetect.segment import segment
 from ontodetect.synth.furniture import make_furniture
-from ontodetect.synth.meshes import Mesh
 
 BAR_STOOL = """\
 format: ontodetect.ontology/1

@@ -39,8 +39,10 @@ from numpy.typing import ArrayLike, NDArray
 from .._progress import progress
 from ..cloud import PointCloud, point_cloud
 from ..errors import InvalidParameterError, WriteError
+from ..geometry._mesh import Mesh
+from ..io import atomic_write_bytes, write_cloud
 from ..ontology import Ontology, builtin_ontology
-from ..synth.meshes import Mesh
+from ..preprocess import level_transform, rotation_between
 from ._icp import INLIER_DISTANCE, KERNELS, ground_icp, pose_matrix
 from ._models import (
     DEFAULT_COLOR,
@@ -185,8 +187,6 @@ class LevelFrame:
     @classmethod
     def from_dict(cls, frame: Mapping[str, Any]) -> LevelFrame:
         """The frame of a detections.json (``{"up": [3], "ground_z": z, "scale": k}``)."""
-        from ..preprocess import level_transform
-
         try:
             up = np.asarray(frame["up"], dtype=np.float64).reshape(3)
             ground = float(frame.get("ground_z", 0.0))
@@ -817,7 +817,7 @@ def fit_object(
     >>> chair = lib["chair-4leg"]
     >>> pts = chair.points(0.01) @ np.array([[0, -1, 0], [1, 0, 0], [0, 0, 1]]).T + [2, 1, 0]
     >>> fit = fit_object(pts, "chair", lib)
-    >>> fit.model, round(math.degrees(fit.yaw)), np.round([fit.x, fit.y], 3).tolist()
+    >>> fit.model, round(math.degrees(fit.yaw)), np.round([fit.x, fit.y], 2).tolist()
     ('chair-4leg', 90, [2.0, 1.0])
     """
     lib = builtin_library() if library is None else library
@@ -1262,8 +1262,6 @@ class ObjectMapFiles:
 
 def _y_up(up: NDArray[np.float64]) -> NDArray[np.float64]:
     """4x4 rotation taking the input's up direction to +y (glTF's up)."""
-    from ..preprocess import rotation_between
-
     T = np.eye(4)
     T[:3, :3] = rotation_between(up, (0.0, 1.0, 0.0))
     return T
@@ -1301,8 +1299,6 @@ def write_object_map(
     ObjectMapFiles
     """
     import trimesh  # lazy: trimesh only to write the object map
-
-    from ..io import atomic_write_bytes, write_cloud
 
     out = Path(out_dir)
     try:

@@ -38,9 +38,9 @@ import yaml
 from numpy.typing import NDArray
 
 from ..errors import CorruptFileError, InvalidParameterError, ReadError
+from ..geometry._mesh import Mesh
 from ..io._textfile import read_text
 from ..preprocess import AXES
-from ..synth.meshes import Mesh
 from ._models import (
     DEFAULT_COLOR,
     LABEL_COLORS,

@@ -20,7 +20,7 @@ grid-averaged (:func:`grid_downsample`, 0.5 cm by default, the grid of the
 thesis's experiment) before matching; samples are cached on the model.
 
 :func:`builtin_library` holds procedural generic models built from the solids
-of :mod:`ontodetect.synth.meshes`: chairs (four-legged, with arms, office
+of :mod:`ontodetect.geometry._mesh`: chairs (four-legged, with arms, office
 swivel, moulded shell, armchair), sofas (two and three seats), tables (rectangular, square,
 round, coffee) and a desk. They are deliberately plain, like the roughly drawn
 models of the thesis: dimensions are the middle of the ranges of furniture
@@ -40,9 +40,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidParameterError
+from ..geometry import _mesh as M
+from ..geometry._mesh import Mesh
 from ..preprocess import voxelize
-from ..synth import meshes as M
-from ..synth.meshes import Mesh
 
 if TYPE_CHECKING:
     from scipy.spatial import cKDTree
@@ -189,7 +189,7 @@ def visible_shell(mesh: Mesh, hidden_normal_z: float = HIDDEN_NORMAL_Z) -> Mesh:
 
     Examples
     --------
-    >>> from ontodetect.synth.meshes import box
+    >>> from ontodetect.geometry._mesh import box
     >>> len(box((1.0, 1.0, 1.0)).triangles), len(visible_shell(box((1.0, 1.0, 1.0))).triangles)
     (12, 10)
     """
@@ -255,7 +255,7 @@ def visible_surface(
 
     Examples
     --------
-    >>> from ontodetect.synth.meshes import box
+    >>> from ontodetect.geometry._mesh import box
     >>> thin = visible_surface(box((1.0, 1.0, 0.5), (0.0, 0.0, 0.25)))
     >>> bool(thin.vertices[:, 2].max() == 0.5), bool(thin.vertices[:, 2].min() == 0.0)
     (True, True)

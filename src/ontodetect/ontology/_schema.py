@@ -39,6 +39,7 @@ __all__ = [
     "Attach",
     "ClusterRule",
     "LabelModel",
+    "LowSeed",
     "ObjectClass",
     "Ontology",
     "Part",
@@ -127,6 +128,9 @@ class Attach:
         Shortest seed (m) that can have a back top (upholstered sofas).
     back_top : float
         Highest (m above the floor) a back top may be.
+    outer_margin : float
+        Around the parts that joined, the seed's object reaches only this far (m) beyond
+        the gaps of a sparse scan: their outer faces drop straight to the floor.
     """
 
     rise: tuple[float, float]
@@ -138,6 +142,27 @@ class Attach:
     back_span: float
     back_seat_length: float
     back_top: float
+    outer_margin: float
+
+
+@dataclass(frozen=True)
+class LowSeed:
+    """How the cluster of a low seed (a seat found as a dense patch) takes in fragments.
+
+    Attributes
+    ----------
+    up_to : float
+        Seeds no higher than this (m) take fragments within ``margin`` of what they
+        claimed at their own height and close to the box of their whole cluster.
+    level : float
+        Voxels this close (m) to the seed's height are the seat as scanned.
+    margin : float
+        How far (m) from that the fragments may lie.
+    """
+
+    up_to: float
+    level: float
+    margin: float
 
 
 @dataclass(frozen=True)
@@ -158,6 +183,8 @@ class SeedStyle:
         a backrest beside its edge is something else).
     attach : Attach or None
         Narrow parts a little above it that join it (a seat's armrests); ``None``: none.
+    low : LowSeed or None
+        How a low seed's cluster takes in fragments beyond its prism; ``None``: it does not.
     """
 
     name: str
@@ -166,6 +193,7 @@ class SeedStyle:
     outside_cost: float
     inside_above: bool = False
     attach: Attach | None = None
+    low: LowSeed | None = None
 
 
 @dataclass(frozen=True)
@@ -579,6 +607,7 @@ def _attach(spec: Any, path: tuple[Any, ...]) -> Attach:
         "back_span",
         "back_seat_length",
         "back_top",
+        "outer_margin",
     ]
     _only(spec, {"rise", "description", *names}, path)
     if "rise" not in spec:
@@ -592,7 +621,13 @@ def _attach(spec: Any, path: tuple[Any, ...]) -> Attach:
 
 def _seed_style(name: str, spec: Any, path: tuple[Any, ...]) -> SeedStyle:
     spec = _mapping(spec, path)
-    _only(spec, {"margin", "rise", "outside_cost", "inside_above", "attach", "description"}, path)
+    keys = {"margin", "rise", "outside_cost", "inside_above", "attach", "low", "description"}
+    _only(spec, keys, path)
+    low = None
+    if spec.get("low") is not None:
+        lspec = _mapping(spec["low"], path + ("low",))
+        _only(lspec, {"up_to", "level", "margin", "description"}, path + ("low",))
+        low = LowSeed(*(_positive(lspec, k, path + ("low",)) for k in ("up_to", "level", "margin")))
     inside = spec.get("inside_above", False)
     if not isinstance(inside, bool):
         raise _Problem(path + ("inside_above",), f"expected true or false, got {inside!r}")
@@ -603,6 +638,7 @@ def _seed_style(name: str, spec: Any, path: tuple[Any, ...]) -> SeedStyle:
         outside_cost=_positive(spec, "outside_cost", path),
         inside_above=inside,
         attach=None if spec.get("attach") is None else _attach(spec["attach"], path + ("attach",)),
+        low=low,
     )
 
 

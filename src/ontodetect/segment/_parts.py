@@ -72,17 +72,6 @@ JOIN_SHARE = 0.6
 #: it: armrests and backrest tops stand outside a seat's box, and the box of an L-shaped
 #: seat is a diagonal rectangle that misses the ends of its arms.
 FOOTPRINT_GAP = 0.05
-#: Voxels of a seat's cluster this close (m) to its height are the seat as scanned.
-SEAT_LEVEL = 0.05
-#: Fragments join a seat's cluster within ``LEVEL_MARGIN`` (m) of what it claimed at its
-#: own height (a back leaning behind a seat seen in part), or within ``FOOTPRINT_GAP`` of
-#: its whole box (a back between two arms), for seats no higher than ``LOW_SEAT`` (m):
-#: parts at 60–75 cm are as often desk tops, whose clusters must not grow that way.
-LEVEL_MARGIN = 0.2
-LOW_SEAT = 0.6
-#: Around the armrests and back top that joined a seat its prism reaches only this far
-#: (m) beyond ``FOOTPRINT_GAP``: their outer faces drop straight to the floor.
-ATTACHED_MARGIN = 0.1
 #: Long regions are split by dividing the longest link they keep by this, repeatedly.
 SPLIT_STEP = 1.25
 
@@ -180,7 +169,7 @@ class PartSeed:
 
         Above a table top only its outline counts: what stands beside it and rises
         above it (a chair's backrest against its edge) is something else. Around the
-        armrests and back top attached to a seat, ``ATTACHED_MARGIN`` applies.
+        armrests and back top attached to a seat, the style's ``attach.outer_margin`` applies.
         """
         margin = self.margin if margin is None else margin
         out = self._outside_outline(points, signed=True)
@@ -194,7 +183,7 @@ class PartSeed:
             # The outer faces of arms and of a thick back drop from their tops: what
             # stands further out (a console table behind the sofa) is something else.
             dist, _ = tree.query(points[:, :2], k=1)
-            inside |= dist <= FOOTPRINT_GAP + min(margin, ATTACHED_MARGIN)
+            inside |= dist <= FOOTPRINT_GAP + min(margin, self.style.attach.outer_margin)
         return inside & (points[:, 2] <= self.height + self.rise)
 
     def to_dict(self) -> dict:
@@ -595,7 +584,7 @@ def _join_fragments(labels, centers, seeds, n_seeds) -> None:
         if k not in boxes:
             s = seeds[k]
             mine = centers[labels == k]
-            level = mine[np.abs(mine[:, 2] - s.height) <= SEAT_LEVEL]
+            level = mine[np.abs(mine[:, 2] - s.height) <= s.style.low.level]
             boxes[k] = tuple(
                 PartSeed(s.voxels, s.height, s.area, *_outline(pts[:, :2]), style=s.style)
                 for pts in (mine, level if len(level) else mine)
@@ -611,10 +600,13 @@ def _join_fragments(labels, centers, seeds, n_seeds) -> None:
         best, best_d = -1, np.inf
         for k in candidates:
             inside = seeds[k].in_prism(centers[frag])
-            if seeds[k].height <= LOW_SEAT:
+            low = seeds[k].style.low
+            if low is not None and seeds[k].height <= low.up_to:
+                # Within FOOTPRINT_GAP of its whole box (a back between two arms), or within
+                # ``low.margin`` of what it claimed at its own height.
                 whole, level = footprints(int(k))
                 inside |= whole.in_prism(centers[frag], margin=FOOTPRINT_GAP)
-                inside |= level.in_prism(centers[frag], margin=LEVEL_MARGIN)
+                inside |= level.in_prism(centers[frag], margin=low.margin)
             share = float(np.mean(inside))
             dk = float(dist[hit][owner[idx[hit]] == k].min())
             if share >= JOIN_SHARE and dk < best_d:
