@@ -41,14 +41,30 @@ def test_every_scope_lists_its_features():
 
 
 def test_sigma_floors_are_those_calibration_used():
-    """The floors calibration kept beside it (evaluation._calibrate.ABS_SIGMA_FLOOR) are the
-    registry's, and every feature has one (0 for the sensor-dependent counts)."""
-    from ontodetect.evaluation._calibrate import ABS_SIGMA_FLOOR
-
-    for name, floor in ABS_SIGMA_FLOOR.items():
+    """The absolute floors calibration kept beside it (evaluation._calibrate.ABS_SIGMA_FLOOR
+    on 2026-11-24) are the registry's, and only these features have one."""
+    floors = {
+        "tilt": 1.0,
+        "angle": 2.0,
+        "height": 0.02,
+        "top": 0.02,
+        "bottom": 0.02,
+        "gap": 0.02,
+        "distance": 0.01,
+        "length": 0.03,
+        "width": 0.03,
+        "breadth": 0.03,
+        "area": 0.01,
+        "fill": 0.03,
+        "open_below": 0.03,
+        "overlap": 0.03,
+        "rise": 0.02,
+        "planes": 0.5,
+    }
+    for name, floor in floors.items():
         assert sigma_floor(name) == floor, name
     names = {n for table in FEATURES.values() for n in table}
-    assert {n for n in names if sigma_floor(n) > 0} == set(ABS_SIGMA_FLOOR)
+    assert {n for n in names if sigma_floor(n) > 0} == set(floors)
     assert sigma_floor("density") == sigma_floor("points") == sigma_floor("nothing") == 0.0
 
 

@@ -39,6 +39,7 @@ def test_the_builtin_roles_are_those_the_code_had():
         assert o.cad_search("top", label) == (0.3, 1.15)
     assert o.cad_scale("sofa") == (0.6, 1.8) and o.cad_scale("table") == (0.4, 3.0)
     assert o.cad_scale("chair") is None
+    assert o.cad_above_seat("chair") == o.cad_above_seat("table") == 0.27  # BACK_ABOVE_SEAT
 
 
 def test_a_file_may_use_the_builtin_seed_styles_and_define_its_own(tmp_path):
@@ -68,6 +69,11 @@ def test_a_file_may_use_the_builtin_seed_styles_and_define_its_own(tmp_path):
             "low < high",
         ),
         ("      p: {cad: {role: seat, size: 2}}\n", "classes.c.parts.p.cad.size", "unknown key"),
+        (
+            "      p: {cad: {role: seat, above_seat: 0.2}}\n",
+            "classes.c.parts.p.cad.above_seat",
+            "only a back part",
+        ),
         ("      p: {}\n    context: table\n", "classes.c.context", "list of class names"),
         ("      p: {}\n    cad: {scale: [2, 1]}\n", "classes.c.cad.scale", "low < high"),
         ("      p: {}\n    cad: {stretch: 1}\n", "classes.c.cad.stretch", "unknown key"),
@@ -89,6 +95,7 @@ def test_role_errors_name_the_dotted_key_and_the_file(body, key, message):
             "seeds.s.inside_above",
         ),
         ("  s: {margin: 0.1, rise: 0.2, outside_cost: 1, attach: {width: 1}}\n", "seeds.s.attach"),
+        ("  s: {margin: 0.1, rise: 0.2, outside_cost: 1, low: {up_to: 0.6}}\n", "seeds.s.low"),
     ],
 )
 def test_seed_style_errors(seeds, key):

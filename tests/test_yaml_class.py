@@ -111,3 +111,24 @@ def test_cad_fitting_scales_a_generic_model_by_its_declared_seat(ontology, stool
     assert hints_from_points(pts, "bar_stool").seat_center is None or (
         hints_from_points(pts, "bar_stool").seat_center[2] < 0.76
     )
+
+
+def test_its_context_rewards_a_bar_stool_beside_a_table(ontology):
+    """The labelling's context term comes from the class's ``context``, not from its name."""
+    from types import SimpleNamespace
+
+    from ontodetect.labeling import label_clusters
+    from ontodetect.ontology import ClusterScores
+
+    def scores(**probs):
+        probs = {name: 0.0 for name in ontology.names} | probs
+        probs["none"] = max(0.0, 1 - sum(probs.values()))
+        return ClusterScores(classes={}, probabilities=probs, best=max(probs, key=probs.get))
+
+    amb = scores(bar_stool=0.40, table=0.40)
+    planes = [[SimpleNamespace(length=0.8, width=0.5, color_mean=None)]] * 2  # a table's size
+    centers = [[0.0, 0.0, 0.8], [0.5, 0.0, 0.9]]
+    pair = [amb, scores(table=0.9)]
+    alone = label_clusters(pair, planes, ontology)
+    helped = label_clusters(pair, planes, ontology, centers=centers, context=0.3)
+    assert alone[0].extra["class"] == "table" and helped[0].extra["class"] == "bar_stool"

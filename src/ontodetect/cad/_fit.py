@@ -125,9 +125,8 @@ LAYER_SHARE = 0.5
 #: The hint each CAD role of a detection's part gives (the top is measured on the points:
 #: a cluttered top splits into several planes).
 PART_HINTS = {"seat": "seat_center", "back": "backrest_center"}
-#: Backrest points are those this far (m) above the seat: above the armrests (20–25 cm above
-#: the seat, EN 1335), so that arms do not pull the backrest's centre sideways.
-BACK_ABOVE_SEAT = 0.27
+#: Backrest points are those the ontology's ``back`` part's ``above_seat`` (built in 27 cm,
+#: above the armrests) above the seat, so that arms do not pull its centre sideways.
 #: A backrest needs at least this many points, and its centre this far (m) from the seat's.
 MIN_BACK_POINTS = 10
 MIN_BACK_OFFSET = 0.04
@@ -396,8 +395,9 @@ def hints_from_points(
     dense means at least half as many points as the densest layer. The heights
     are the ontology's ``cad.search`` of the parts with the roles ``seat`` and
     ``top`` (the built-in ontology: seats 30–75 cm, tops 30 cm–1.15 m). The
-    backrest is what rises more than 27 cm above the seat; the front is the
-    direction from the backrest's centre to the seat's.
+    backrest is what rises more than the ``back`` part's ``above_seat`` above the
+    seat (built in: 27 cm); the front is the direction from the backrest's centre
+    to the seat's.
 
     Parameters
     ----------
@@ -434,7 +434,8 @@ def hints_from_points(
     seat_h = None if seat_range is None else _layer(z, *seat_range, lowest=True)
     if seat_h is not None:
         xy = _surface_only(pts[np.abs(z - seat_h) <= LAYER_HALF, :2])
-        back = z > seat_h + BACK_ABOVE_SEAT
+        above = onto.cad_above_seat(label)
+        back = z > seat_h + (np.inf if above is None else above)
         front = None
         if back.sum() >= MIN_BACK_POINTS:
             out["backrest_center"] = pts[back].mean(axis=0)

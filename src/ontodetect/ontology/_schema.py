@@ -78,6 +78,8 @@ class Part:
     #: Heights (m) where CAD fitting looks for this part in the object's points;
     #: ``None``: the ends of its ``height`` constraint.
     cad_search: tuple[float, float] | None = None
+    #: A ``back`` part: CAD fitting takes the points this far (m) above the seat as it.
+    cad_above_seat: float | None = None
 
     @property
     def height_span(self) -> tuple[float, float] | None:
@@ -331,6 +333,17 @@ class Ontology:
                 return min(s[0] for s in spans), max(s[1] for s in spans)  # type: ignore[index]
         return None
 
+    def cad_above_seat(self, label: str | None = None) -> float | None:
+        """How far (m) above the seat CAD fitting takes points as the backrest: the first
+        ``back`` part of ``label``'s classes that says, else of any class (``None``: none)."""
+        for only in (label, None):
+            for c in self.classes:
+                if only is None or c.label == only:
+                    for p in c.parts:
+                        if p.cad == "back" and p.cad_above_seat is not None:
+                            return p.cad_above_seat
+        return None
+
     def cad_scale(self, label: str) -> tuple[float, float] | None:
         """Footprint scale bounds for the models of ``label`` (its first class that has any)."""
         for c in self.classes:
@@ -547,7 +560,7 @@ def _part(name: str, spec: Any, path: tuple[Any, ...], seeds: Mapping[str, Any])
             raise _Problem(
                 path + ("seed",), "a seed part needs a height constraint with an upper end"
             )
-    cad, search = _cad_role(spec.get("cad"), path + ("cad",))
+    cad, search, above = _cad_role(spec.get("cad"), path + ("cad",))
     return Part(
         name=name,
         constraints=constraints,
@@ -557,6 +570,7 @@ def _part(name: str, spec: Any, path: tuple[Any, ...], seeds: Mapping[str, Any])
         seed=seed,
         cad=cad,
         cad_search=search,
+        cad_above_seat=above,
     )
 
 
@@ -570,21 +584,27 @@ def _pair(value: Any, path: tuple[Any, ...], low: float = 0.0) -> tuple[float, f
     return a, b
 
 
-def _cad_role(value: Any, path: tuple[Any, ...]) -> tuple[str | None, tuple[float, float] | None]:
-    """A part's ``cad``: a role name, or ``{role: name, search: [low, high]}``."""
+def _cad_role(
+    value: Any, path: tuple[Any, ...]
+) -> tuple[str | None, tuple[float, float] | None, float | None]:
+    """A part's ``cad``: a role name, or ``{role: name, search: [low, high], above_seat: h}``."""
     if value is None:
-        return None, None
-    search = None
+        return None, None, None
+    search = above = None
     role_path = path
     if isinstance(value, dict):
-        _only(value, {"role", "search"}, path)
+        _only(value, {"role", "search", "above_seat"}, path)
         if "search" in value:
             search = _pair(value["search"], path + ("search",))
+        if "above_seat" in value:
+            above = _positive(value, "above_seat", path)
         role_path = path + ("role",)
         value = value.get("role")
     if value not in CAD_ROLES:
         raise _Problem(role_path, f"expected one of {', '.join(CAD_ROLES)}, got {value!r}")
-    return value, search
+    if above is not None and value != "back":
+        raise _Problem(path + ("above_seat",), "only a back part has a height above the seat")
+    return value, search, above
 
 
 def _positive(spec: Mapping[str, Any], key: str, path: tuple[Any, ...]) -> float:
