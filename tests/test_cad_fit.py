@@ -28,9 +28,9 @@ from ontodetect.cad import (
 )
 from ontodetect.cad._models import sample_surface, visible_shell
 from ontodetect.errors import InvalidParameterError
+from ontodetect.geometry._mesh import Mesh
 from ontodetect.synth import synthesize
 from ontodetect.synth.furniture import make_furniture, place
-from ontodetect.synth.meshes import Mesh
 
 
 def angle_error(a: float, b: float, period: float = 2 * math.pi) -> float:

@@ -25,7 +25,7 @@ from ontodetect.cad import (
 )
 from ontodetect.cad._models import VIEW_HEIGHTS
 from ontodetect.errors import CorruptFileError, InvalidParameterError, ReadError
-from ontodetect.synth.meshes import Mesh, box
+from ontodetect.geometry._mesh import Mesh, box
 
 
 def test_builtin_library_covers_the_classes():

@@ -14,9 +14,9 @@ from ontodetect import point_cloud, read_cloud, write_cloud
 from ontodetect.cad import builtin_library
 from ontodetect.cad._models import sample_surface, visible_shell
 from ontodetect.cli import main
+from ontodetect.geometry._mesh import Mesh
 from ontodetect.io._detections import read_detections, write_detections
 from ontodetect.synth.furniture import make_furniture, place
-from ontodetect.synth.meshes import Mesh
 
 
 @pytest.fixture

@@ -7,7 +7,7 @@ import pytest
 import trimesh
 
 from ontodetect import InvalidParameterError
-from ontodetect.synth import meshes as M
+from ontodetect.geometry import _mesh as M
 from ontodetect.synth.furniture import (
     FURNITURE,
     FURNITURE_CLASSES,

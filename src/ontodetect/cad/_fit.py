@@ -31,17 +31,18 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy import ndimage
-from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 from .._progress import progress
 from ..cloud import PointCloud, point_cloud
 from ..errors import InvalidParameterError, WriteError
-from ..synth.meshes import Mesh
+from ..geometry._mesh import Mesh
+from ..io import atomic_write_bytes, write_cloud
+from ..ontology import Ontology, builtin_ontology
+from ..preprocess import level_transform, rotation_between
 from ._icp import INLIER_DISTANCE, KERNELS, ground_icp, pose_matrix
 from ._models import (
     DEFAULT_COLOR,
@@ -54,6 +55,9 @@ from ._models import (
     grid_downsample,
     sample_surface,
 )
+
+if TYPE_CHECKING:
+    from scipy.spatial import cKDTree
 
 __all__ = [
     "MIN_SCORE",
@@ -115,13 +119,14 @@ LAYER_HALF = 0.025
 #: Layers at least this dense (share of the densest) count: the seat is the lowest of them
 #: (armrests and a sofa's arms are higher), the top of a table the highest (a shelf is lower).
 LAYER_SHARE = 0.5
-#: Heights (m) where a seat and a table top are sought (Table 4.1: seats 35–75 cm; tables
-#: from coffee tables to bar tables).
-SEAT_RANGE = (0.30, 0.75)
-TOP_RANGE = (0.30, 1.15)
-#: Backrest points are those this far (m) above the seat: above the armrests (20–25 cm above
-#: the seat, EN 1335), so that arms do not pull the backrest's centre sideways.
-BACK_ABOVE_SEAT = 0.27
+#: Where a seat and a table top are sought, which parts of a detection give the seat and
+#: the backrest, and how far a model's footprint may stretch come from the ontology: its
+#: parts' ``cad`` roles and its classes' ``cad.scale`` (data/furniture.yaml).
+#: The hint each CAD role of a detection's part gives (the top is measured on the points:
+#: a cluttered top splits into several planes).
+PART_HINTS = {"seat": "seat_center", "back": "backrest_center"}
+#: Backrest points are those the ontology's ``back`` part's ``above_seat`` (built in 27 cm,
+#: above the armrests) above the seat, so that arms do not pull its centre sideways.
 #: A backrest needs at least this many points, and its centre this far (m) from the seat's.
 MIN_BACK_POINTS = 10
 MIN_BACK_OFFSET = 0.04
@@ -134,10 +139,8 @@ EXTENT_PERCENTILES = (1.0, 99.0)
 MIN_LAYER_POINTS = 10
 
 # -- scaling the model to the object -------------------------------------------------------
-#: Bounds of the scale factors: a sofa's length, a table's top (from a square side table
-#: to a conference table) and the height of a seat or top.
-SOFA_SCALE = (0.6, 1.8)
-TABLE_SCALE = (0.4, 3.0)
+#: Bounds of the scale factor of the height of a seat or top (those of a footprint are the
+#: class's ``cad.scale`` in the ontology).
 HEIGHT_SCALE = (0.75, 1.35)
 #: A seat longer than this many times its depth is a sofa's: scaled along its length.
 LONG_SEAT = 1.5
@@ -183,8 +186,6 @@ class LevelFrame:
     @classmethod
     def from_dict(cls, frame: Mapping[str, Any]) -> LevelFrame:
         """The frame of a detections.json (``{"up": [3], "ground_z": z, "scale": k}``)."""
-        from ..preprocess import level_transform
-
         try:
             up = np.asarray(frame["up"], dtype=np.float64).reshape(3)
             ground = float(frame.get("ground_z", 0.0))
@@ -338,6 +339,8 @@ def _rectangle(
     if len(xy) < 3:
         return xy.mean(axis=0), np.zeros(2), 0.0 if yaw is None else yaw
     if yaw is None:
+        from scipy.spatial import ConvexHull, QhullError  # lazy: scipy.spatial off the import path
+
         try:
             hull = xy[ConvexHull(xy).vertices]
         except QhullError:
@@ -374,26 +377,37 @@ def _surface_only(xy: NDArray[np.float64]) -> NDArray[np.float64]:
     ij = np.floor((xy - xy.min(axis=0)) / LAYER_CELL).astype(np.int64)
     grid = np.zeros(ij.max(axis=0) + 1, dtype=bool)
     grid[ij[:, 0], ij[:, 1]] = True
+    from scipy import ndimage  # lazy: scipy.ndimage off the import path
+
     opened = ndimage.binary_opening(grid, structure=np.ones((3, 3), dtype=bool))
     keep = opened[ij[:, 0], ij[:, 1]]
     return xy[keep] if keep.mean() >= MIN_SURFACE_SHARE else xy
 
 
-def hints_from_points(points: ArrayLike) -> ObjectHints:
+def hints_from_points(
+    points: ArrayLike, label: str | None = None, ontology: Ontology | None = None
+) -> ObjectHints:
     """Seat, backrest and top of an object from its levelled points alone.
 
     A horizontal surface puts many points at one height, legs and backrests
-    spread theirs: the seat is the lowest dense layer between 30 and 75 cm
-    (armrests are higher) and the top the highest one between 30 cm and 1.15 m
-    (a shelf is lower); dense means at least half as many points as the
-    densest layer. The backrest is
-    what rises more than 27 cm above the seat; the front is the direction from
-    the backrest's centre to the seat's.
+    spread theirs: the seat is the lowest dense layer at seat height (armrests
+    are higher) and the top the highest one at top height (a shelf is lower);
+    dense means at least half as many points as the densest layer. The heights
+    are the ontology's ``cad.search`` of the parts with the roles ``seat`` and
+    ``top`` (the built-in ontology: seats 30–75 cm, tops 30 cm–1.15 m). The
+    backrest is what rises more than the ``back`` part's ``above_seat`` above the
+    seat (built in: 27 cm); the front is the direction from the backrest's centre
+    to the seat's.
 
     Parameters
     ----------
     points : (n, 3) float
         The object's points, levelled (z up, floor at 0, metres).
+    label : str, optional
+        Its label: the search heights of that label's classes, those of all
+        classes when it has none.
+    ontology : Ontology, optional
+        The built-in ontology by default.
 
     Returns
     -------
@@ -414,11 +428,14 @@ def hints_from_points(points: ArrayLike) -> ObjectHints:
     if len(pts) < MIN_LAYER_POINTS:
         return ObjectHints()
     z = pts[:, 2]
+    onto = builtin_ontology() if ontology is None else ontology
     out: dict[str, Any] = {"height": float(np.percentile(z, 99))}
-    seat_h = _layer(z, *SEAT_RANGE, lowest=True)
+    seat_range = onto.cad_search("seat", label)
+    seat_h = None if seat_range is None else _layer(z, *seat_range, lowest=True)
     if seat_h is not None:
         xy = _surface_only(pts[np.abs(z - seat_h) <= LAYER_HALF, :2])
-        back = z > seat_h + BACK_ABOVE_SEAT
+        above = onto.cad_above_seat(label)
+        back = z > seat_h + (np.inf if above is None else above)
         front = None
         if back.sum() >= MIN_BACK_POINTS:
             out["backrest_center"] = pts[back].mean(axis=0)
@@ -430,7 +447,8 @@ def hints_from_points(points: ArrayLike) -> ObjectHints:
         out["axis_yaw"] = axis
         if front is not None:
             out["front_yaw"] = _front(out["seat_center"], out["backrest_center"])
-    top_h = _layer(z, *TOP_RANGE, lowest=False)
+    top_range = onto.cad_search("top", label)
+    top_h = None if top_range is None else _layer(z, *top_range, lowest=False)
     if top_h is not None:
         center, extent, axis = _rectangle(pts[np.abs(z - top_h) <= LAYER_HALF, :2])
         out["top_center"] = np.array([center[0], center[1], top_h])
@@ -439,20 +457,23 @@ def hints_from_points(points: ArrayLike) -> ObjectHints:
     return ObjectHints(**out)
 
 
-def _hints_from_parts(parts: Sequence[Mapping[str, Any]], frame: LevelFrame) -> ObjectHints:
+def _hints_from_parts(
+    parts: Sequence[Mapping[str, Any]], frame: LevelFrame, roles: Mapping[str, str]
+) -> ObjectHints:
     """The seat and backrest of a detection's parts (input frame) in the levelled frame.
 
-    They give the front of seating. A table's top plane can be a piece of the
+    ``roles`` maps part names to their CAD roles (:meth:`Ontology.cad_parts`). Seat and
+    backrest give the front of seating. A table's top plane can be a piece of the
     top (a cluttered top splits into several planes), so the top is measured on
     the points instead (:func:`hints_from_points`); so are seat sizes.
     """
     out: dict[str, Any] = {}
     for p in parts or ():
-        name = str(p.get("name"))
+        key = PART_HINTS.get(roles.get(str(p.get("name")), ""))
         centroid = p.get("centroid")
-        if name not in ("seat", "backrest") or centroid is None or f"{name}_center" in out:
+        if key is None or centroid is None or key in out:
             continue
-        out[f"{name}_center"] = frame.level(np.asarray(centroid, dtype=np.float64))[0]
+        out[key] = frame.level(np.asarray(centroid, dtype=np.float64))[0]
     if "seat_center" in out and "backrest_center" in out:
         out["front_yaw"] = _front(out["seat_center"], out["backrest_center"])
     return ObjectHints(**out)
@@ -572,10 +593,18 @@ def _clip(v: float, bounds: tuple[float, float]) -> float:
     return float(np.clip(v, *bounds))
 
 
-def model_scale(model: CadModel, hints: ObjectHints) -> NDArray[np.float64]:
-    """(3,) factors that stretch a model to the object's measured seat or top (1 if unknown)."""
+def model_scale(
+    model: CadModel, hints: ObjectHints, ontology: Ontology | None = None
+) -> NDArray[np.float64]:
+    """(3,) factors that stretch a model to the object's measured seat or top (1 if unknown).
+
+    Heights follow the seat or top within ``HEIGHT_SCALE``; a footprint stretches within
+    the ``cad.scale`` of the model's class in ``ontology`` (the built-in one by default),
+    and keeps its generic size when the class gives none.
+    """
     s = np.ones(3)
     dims = model.dims
+    bounds = (builtin_ontology() if ontology is None else ontology).cad_scale(model.label)
     if model.is_seating:
         if hints.seat_center is not None:
             s[2] = _clip(hints.seat_center[2] / dims["seat_height"], HEIGHT_SCALE)
@@ -583,21 +612,21 @@ def model_scale(model: CadModel, hints: ObjectHints) -> NDArray[np.float64]:
         sw, sd = dims.get("seat_width"), dims.get("seat_depth")
         # A chair's seat is too small, and too often hidden under a table, for its
         # measured size to beat the generic one; a sofa's length varies far more.
-        if e is not None and sw and sd and sw > LONG_SEAT * sd:
-            s[0] = _clip(e[0] / sw, SOFA_SCALE)
+        if e is not None and sw and sd and sw > LONG_SEAT * sd and bounds is not None:
+            s[0] = _clip(e[0] / sw, bounds)
     elif "top_height" in dims:
         if hints.top_center is not None:
             s[2] = _clip(hints.top_center[2] / dims["top_height"], HEIGHT_SCALE)
         e = hints.top_extent
         tw, td = dims.get("top_width"), dims.get("top_depth")
-        if e is not None and tw and td:
+        if e is not None and tw and td and bounds is not None:
             if model.symmetry == 0:
-                s[0] = s[1] = _clip(float(np.mean(e)) / tw, TABLE_SCALE)
+                s[0] = s[1] = _clip(float(np.mean(e)) / tw, bounds)
             elif model.symmetry == 4:
-                s[0] = s[1] = _clip(math.sqrt(e[0] * e[1]) / tw, TABLE_SCALE)
+                s[0] = s[1] = _clip(math.sqrt(e[0] * e[1]) / tw, bounds)
             else:
-                s[0] = _clip(e[0] / tw, TABLE_SCALE)
-                s[1] = _clip(e[1] / td, TABLE_SCALE)
+                s[0] = _clip(e[0] / tw, bounds)
+                s[1] = _clip(e[1] / td, bounds)
     return s
 
 
@@ -742,6 +771,7 @@ def fit_object(
     kernel: str = "tukey",
     inlier_distance: float = INLIER_DISTANCE,
     seed: int | np.random.Generator | None = 0,
+    ontology: Ontology | None = None,
 ) -> CadFit:
     """Choose and fit the generic model of ``label`` that best explains an object's points.
 
@@ -773,6 +803,9 @@ def fit_object(
         Distance (m) within which a point counts as matched.
     seed : int or numpy.random.Generator, optional
         Seed of the point subsets the search uses.
+    ontology : Ontology, optional
+        Where seats and tops are sought (its parts' ``cad`` roles) and how far a
+        footprint stretches (its classes' ``cad.scale``); the built-in one by default.
 
     Returns
     -------
@@ -785,7 +818,7 @@ def fit_object(
     >>> chair = lib["chair-4leg"]
     >>> pts = chair.points(0.01) @ np.array([[0, -1, 0], [1, 0, 0], [0, 0, 1]]).T + [2, 1, 0]
     >>> fit = fit_object(pts, "chair", lib)
-    >>> fit.model, round(math.degrees(fit.yaw)), np.round([fit.x, fit.y], 3).tolist()
+    >>> fit.model, round(math.degrees(fit.yaw)), np.round([fit.x, fit.y], 2).tolist()
     ('chair-4leg', 90, [2.0, 1.0])
     """
     lib = builtin_library() if library is None else library
@@ -827,17 +860,19 @@ def fit_object(
     data = grid_downsample(pts, MODEL_SPACING)
     # Layers and outlines need no finer grid than a centimetre; a dense scan has 25 times
     # more points on the 0.5 cm grid.
-    found = hints_from_points(grid_downsample(data, HINT_SPACING))
+    found = hints_from_points(grid_downsample(data, HINT_SPACING), label, ontology)
     hints = found if hints is None else hints.merged(found)
     coarse_data = _subset(data, COARSE_POINTS, rng)
     fine_data = _subset(data, FINE_POINTS, rng)
 
     # Coarse pass: every model from every start, a few steps on a 2 cm model grid; each
     # model keeps its best start.
+    from scipy.spatial import cKDTree  # lazy: scipy.spatial off the import path
+
     data_tree = cKDTree(grid_downsample(data, COVER_SPACING / 2))
     trials = []
     for model in models:
-        scale = model_scale(model, hints) if scale_to_object else np.ones(3)
+        scale = model_scale(model, hints, ontology) if scale_to_object else np.ones(3)
         mpts = model.points(COARSE_SPACING)
         starts = _starts(model, hints, data, mpts, scale)
         res = ground_icp(
@@ -958,6 +993,7 @@ def _fit_entries(
     options: dict[str, Any],
 ) -> list[CadFit]:
     lib = builtin_library() if library is None else library
+    onto = options.get("ontology") or builtin_ontology()
     fits = []
     with progress("Fitting CAD models", total=len(entries)) as advance:
         for e in entries:
@@ -983,7 +1019,7 @@ def _fit_entries(
                     )
                 )
             else:
-                hints = _hints_from_parts(e["parts"], frame)
+                hints = _hints_from_parts(e["parts"], frame, onto.cad_parts(e["label"]))
                 fits.append(
                     fit_object(
                         pts,
@@ -1011,6 +1047,7 @@ def fit_detections(
     scale_to_object: bool = True,
     kernel: str = "tukey",
     inlier_distance: float = INLIER_DISTANCE,
+    ontology: Ontology | None = None,
 ) -> list[CadFit]:
     """Fit a generic model to every detection of a :func:`~ontodetect.pipeline.detect` result.
 
@@ -1026,6 +1063,9 @@ def fit_detections(
         Seed of every random step; the same result and seed give the same fits.
     scale_to_object, kernel, inlier_distance :
         See :func:`fit_object`.
+    ontology : Ontology, optional
+        Which parts give the seat and backrest, where seats and tops are sought and
+        how far footprints stretch (see :func:`fit_object`); the built-in one by default.
 
     Returns
     -------
@@ -1053,6 +1093,7 @@ def fit_detections(
         "scale_to_object": scale_to_object,
         "kernel": kernel,
         "inlier_distance": inlier_distance,
+        "ontology": ontology,
     }
     return _fit_entries(
         entries, lambda rows: levelled[rows], cloud.rgb, frame, library, min_score, seed, options
@@ -1069,6 +1110,7 @@ def fit_document(
     scale_to_object: bool = True,
     kernel: str = "tukey",
     inlier_distance: float = INLIER_DISTANCE,
+    ontology: Ontology | None = None,
 ) -> list[CadFit]:
     """Fit models to the detections of a detections.json document and its input cloud.
 
@@ -1082,7 +1124,7 @@ def fit_document(
         A validated detections.json (:func:`ontodetect.io.read_detections`).
     cloud : PointCloud
         The input file the detections were made on (``point_indices`` are its rows).
-    library, min_score, seed, scale_to_object, kernel, inlier_distance :
+    library, min_score, seed, scale_to_object, kernel, inlier_distance, ontology :
         See :func:`fit_detections`.
 
     Returns
@@ -1123,6 +1165,7 @@ def fit_document(
         "scale_to_object": scale_to_object,
         "kernel": kernel,
         "inlier_distance": inlier_distance,
+        "ontology": ontology,
     }
     xyz = cloud.xyz
     return _fit_entries(
@@ -1220,8 +1263,6 @@ class ObjectMapFiles:
 
 def _y_up(up: NDArray[np.float64]) -> NDArray[np.float64]:
     """4x4 rotation taking the input's up direction to +y (glTF's up)."""
-    from ..preprocess import rotation_between
-
     T = np.eye(4)
     T[:3, :3] = rotation_between(up, (0.0, 1.0, 0.0))
     return T
@@ -1258,9 +1299,7 @@ def write_object_map(
     -------
     ObjectMapFiles
     """
-    import trimesh
-
-    from ..io import atomic_write_bytes, write_cloud
+    import trimesh  # lazy: trimesh only to write the object map
 
     out = Path(out_dir)
     try:

@@ -29,13 +29,16 @@ tries several yaws and models within a few milliseconds.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial import cKDTree
 
 from .._transforms import yaw_pose as pose_matrix
 from ..errors import InvalidParameterError
+
+if TYPE_CHECKING:
+    from scipy.spatial import cKDTree
 
 __all__ = [
     "KERNELS",
@@ -368,6 +371,8 @@ def ground_icp(
             "kernel_scale", "a float in the range (0, inf) or None", kernel_scale
         )
     if tree is None:
+        from scipy.spatial import cKDTree  # lazy: scipy.spatial off the import path
+
         tree = cKDTree(m)
     z = float(z)
     x, y, yaw = st[:, 0].copy(), st[:, 1].copy(), st[:, 2].copy()

@@ -38,9 +38,9 @@ import yaml
 from numpy.typing import NDArray
 
 from ..errors import CorruptFileError, InvalidParameterError, ReadError
+from ..geometry._mesh import Mesh
 from ..io._textfile import read_text
 from ..preprocess import AXES
-from ..synth.meshes import Mesh
 from ._models import (
     DEFAULT_COLOR,
     LABEL_COLORS,
@@ -104,7 +104,7 @@ def load_mesh(path: str | os.PathLike[str]) -> Mesh:
     A file with vertices but no faces gives a :class:`Mesh` without triangles
     (a point set).
     """
-    import trimesh
+    import trimesh  # lazy: trimesh only to read mesh files
 
     p = Path(path)
     if not p.is_file():

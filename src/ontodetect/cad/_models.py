@@ -20,7 +20,7 @@ grid-averaged (:func:`grid_downsample`, 0.5 cm by default, the grid of the
 thesis's experiment) before matching; samples are cached on the model.
 
 :func:`builtin_library` holds procedural generic models built from the solids
-of :mod:`ontodetect.synth.meshes`: chairs (four-legged, with arms, office
+of :mod:`ontodetect.geometry._mesh`: chairs (four-legged, with arms, office
 swivel, moulded shell, armchair), sofas (two and three seats), tables (rectangular, square,
 round, coffee) and a desk. They are deliberately plain, like the roughly drawn
 models of the thesis: dimensions are the middle of the ranges of furniture
@@ -34,16 +34,18 @@ import itertools
 import math
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial import cKDTree
 
 from ..errors import InvalidParameterError
+from ..geometry import _mesh as M
+from ..geometry._mesh import Mesh
 from ..preprocess import voxelize
-from ..synth import meshes as M
-from ..synth.meshes import Mesh
+
+if TYPE_CHECKING:
+    from scipy.spatial import cKDTree
 
 __all__ = [
     "MODEL_SPACING",
@@ -187,7 +189,7 @@ def visible_shell(mesh: Mesh, hidden_normal_z: float = HIDDEN_NORMAL_Z) -> Mesh:
 
     Examples
     --------
-    >>> from ontodetect.synth.meshes import box
+    >>> from ontodetect.geometry._mesh import box
     >>> len(box((1.0, 1.0, 1.0)).triangles), len(visible_shell(box((1.0, 1.0, 1.0))).triangles)
     (12, 10)
     """
@@ -253,7 +255,7 @@ def visible_surface(
 
     Examples
     --------
-    >>> from ontodetect.synth.meshes import box
+    >>> from ontodetect.geometry._mesh import box
     >>> thin = visible_surface(box((1.0, 1.0, 0.5), (0.0, 0.0, 0.25)))
     >>> bool(thin.vertices[:, 2].max() == 0.5), bool(thin.vertices[:, 2].min() == 0.0)
     (True, True)
@@ -262,7 +264,7 @@ def visible_surface(
     """
     if len(mesh.triangles) == 0:
         return mesh
-    import open3d as o3d
+    import open3d as o3d  # lazy: open3d (0.8 s to import) only for visibility tests
 
     tris = _subdivide(mesh.vertices[mesh.triangles], max_edge)
     centre = tris.mean(axis=1)
@@ -393,6 +395,8 @@ class CadModel:
         """A k-d tree of :meth:`points` (cached): one tree serves every object fitted."""
         key = ("tree", float(spacing), seed)
         if key not in self._cache:
+            from scipy.spatial import cKDTree  # lazy: scipy.spatial off the import path
+
             self._cache[key] = cKDTree(self.points(spacing, seed))
         return self._cache[key]
 
@@ -936,8 +940,8 @@ def library_figure(
     matplotlib.figure.Figure
         Not attached to any window; save it with ``fig.savefig(path)``.
     """
-    from matplotlib.figure import Figure
-    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+    from matplotlib.figure import Figure  # lazy: matplotlib only to draw the library
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection  # lazy: as matplotlib
 
     chosen = list(library) if names is None else list(names)
     models = [library[n] for n in chosen]

@@ -10,22 +10,30 @@ cluster's planes to the class's parts and returns P_obj|ont for every class and
 
 from __future__ import annotations
 
-import functools
-from importlib import resources
-from os import PathLike
-
+from ._builtin import builtin_ontology, load_ontology
 from ._environment import class_priors, object_prior, room_categories, room_distribution
-from ._gaussian import Gaussian
-from ._schema import (
+from ._features import (
     CLUSTER_FEATURES,
+    FEATURES,
     PART_FEATURES,
     RELATION_FEATURES,
+    Feature,
+    feature_registry,
+    register_feature,
+    sigma_floor,
+)
+from ._gaussian import Gaussian
+from ._schema import (
+    CAD_ROLES,
+    Attach,
     ClusterRule,
     LabelModel,
+    LowSeed,
     ObjectClass,
     Ontology,
     Part,
     Relation,
+    SeedStyle,
     parse_ontology,
     read_ontology_file,
 )
@@ -45,25 +53,32 @@ from ._score import (
 )
 
 __all__ = [
+    "CAD_ROLES",
     "CLUSTER_FEATURES",
+    "FEATURES",
     "NONE",
     "PART_FEATURES",
     "RELATION_FEATURES",
+    "Attach",
     "ClassScore",
     "ClusterDescription",
     "ClusterRule",
     "ClusterScores",
     "ConstraintValue",
+    "Feature",
     "Gaussian",
     "LabelModel",
+    "LowSeed",
     "ObjectClass",
     "Ontology",
     "Part",
     "Relation",
+    "SeedStyle",
     "builtin_ontology",
     "class_priors",
     "cluster_log_factor",
     "continuations",
+    "feature_registry",
     "load_ontology",
     "missing_factor",
     "object_prior",
@@ -71,29 +86,10 @@ __all__ = [
     "part_values",
     "plane_feature",
     "read_ontology_file",
+    "register_feature",
     "room_categories",
     "room_distribution",
     "score_class",
     "score_cluster",
+    "sigma_floor",
 ]
-
-
-@functools.cache
-def builtin_ontology() -> Ontology:
-    """The shipped furniture ontology: chair, sofa, table (+ stool and bench, not reported)."""
-    text = resources.files("ontodetect").joinpath("data/furniture.yaml").read_text("utf-8")
-    return parse_ontology(text, "builtin:furniture.yaml")
-
-
-def load_ontology(*paths: str | PathLike[str], replace: bool = False) -> Ontology:
-    """The built-in ontology with the classes of ``paths`` added or replacing same-named ones.
-
-    With ``replace=True`` only the files' classes are used.
-    """
-    result = None if replace else builtin_ontology()
-    for p in paths:
-        o = read_ontology_file(p)
-        result = o if result is None else result.merged(o)
-    if result is None:
-        return builtin_ontology()
-    return result

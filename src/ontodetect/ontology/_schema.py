@@ -27,59 +27,33 @@ from typing import Any
 import yaml
 
 from ..errors import InvalidOntologyError
+from ._features import CLUSTER_FEATURES, PART_FEATURES, RELATION_FEATURES
 from ._gaussian import Gaussian
 
 __all__ = [
+    "CAD_ROLES",
     "CLUSTER_FEATURES",
     "FORMAT",
     "PART_FEATURES",
     "RELATION_FEATURES",
+    "Attach",
     "ClusterRule",
     "LabelModel",
+    "LowSeed",
     "ObjectClass",
     "Ontology",
     "Part",
     "Relation",
+    "SeedStyle",
     "parse_ontology",
     "read_ontology_file",
 ]
 
 FORMAT = "ontodetect.ontology/1"
 
-#: Plane features a part may constrain, with the factor of Eq. 3.3 each belongs to.
-PART_FEATURES: dict[str, str] = {
-    "tilt": "Or",  # degrees between the plane's normal and vertical: 0 = horizontal
-    "height": "He",  # centroid height above the floor (m)
-    "top": "He",  # highest inlier above the floor (m)
-    "bottom": "He",  # lowest inlier above the floor (m)
-    "length": "Pr",  # extent along the plane's major axis (m)
-    "width": "Pr",  # extent along its minor axis (m)
-    "area": "Pr",  # covered area (m²)
-    "fill": "De",  # covered area / (length × width): how solid the patch is
-    "density": "De",  # points per m² (depends on the sensor)
-    "points": "De",  # inlier count (depends on the sensor)
-    # Share of the plane's footprint under which the floor was seen (0..1): open below
-    # (a top on legs) or closed (a cabinet, a bed, a box hide the floor under them).
-    # Measured by detect for horizontal planes; unknown elsewhere, which costs nothing.
-    "open_below": "Pr",
-}
-#: Features of a pair of parts ``between: [a, b]``.
-RELATION_FEATURES: dict[str, str] = {
-    "angle": "angle between the normals, folded to [0, 90] degrees",
-    "distance": "closest distance between the two planes' points (m)",
-    "gap": "height of b's centroid minus a's (m)",
-    "overlap": "share of the smaller footprint the two overlap in the xy plane (0..1)",
-}
-#: Whole-cluster features.
-CLUSTER_FEATURES: dict[str, str] = {
-    "length": "longest horizontal side of the upright box (m)",
-    "breadth": "shortest horizontal side of the upright box (m)",
-    "height": "top of the cluster above the floor (m)",
-    "bottom": "lowest point above the floor (m)",
-    "planes": "number of planes found in the cluster",
-    "rise": "height of the cluster above its highest horizontal plane (m): a backrest rises "
-    "above a seat, nothing rises above a cabinet top",
-}
+#: What a part may tell CAD fitting (a part's ``cad``): the seat (its height and centre,
+#: and with the backrest the front), the backrest, the top.
+CAD_ROLES = ("seat", "back", "top")
 #: Factor used for a part that has no plane when the file does not say.
 DEFAULT_MISSING = {True: 0.02, False: 0.3}
 
@@ -95,6 +69,32 @@ class Part:
     #: Factor for no plane when the part is hidden below the cluster's visible bottom
     #: (a seat behind a desk); ``None``: the same as ``missing``.
     occluded: float | None = None
+    #: Name of the seed style (the ontology's ``seeds``) with which a horizontal patch at
+    #: this part's height seeds part-driven segmentation; ``None``: not a seed.
+    seed: str | None = None
+    #: What the part tells CAD fitting: ``seat``, ``back`` or ``top`` (:data:`CAD_ROLES`);
+    #: ``None``: nothing.
+    cad: str | None = None
+    #: Heights (m) where CAD fitting looks for this part in the object's points;
+    #: ``None``: the ends of its ``height`` constraint.
+    cad_search: tuple[float, float] | None = None
+    #: A ``back`` part: CAD fitting takes the points this far (m) above the seat as it.
+    cad_above_seat: float | None = None
+
+    @property
+    def height_span(self) -> tuple[float, float] | None:
+        """Lowest and highest height its ``height`` constraint allows with a factor of at
+        least exp(-1/2): a range's ends, a plateau's or one bound's (the other infinite)."""
+        g = self.constraints.get("height")
+        if g is None:
+            return None
+        if g.side == "plateau":
+            return g.mean, float(g.upper)  # type: ignore[arg-type]
+        if g.side == "min":
+            return g.mean, math.inf
+        if g.side == "max":
+            return -math.inf, g.mean
+        return g.mean - g.sigma, g.mean + g.sigma
 
 
 @dataclass(frozen=True)
@@ -104,6 +104,98 @@ class Relation:
     a: str
     b: str
     constraints: Mapping[str, Gaussian]
+
+
+@dataclass(frozen=True)
+class Attach:
+    """Which narrow horizontal parts a little above a seed join it (armrests, back tops).
+
+    Attributes
+    ----------
+    rise : (float, float)
+        Heights (m) above the seed where armrests and back tops stand.
+    width : float
+        Widest (m) an armrest may be (the widest disc inside it).
+    margin : float
+        How far (m) outside the seed's outline an armrest may stand ...
+    share : float
+        ... with at least this share of it.
+    back_reach : float
+        How far (m) behind the seed the flat top of a thick backrest may stand.
+    back_overhang : float
+        How much (m) longer than the seed a back top may be.
+    back_span : float
+        Shortest back top, as a share of the seed's length.
+    back_seat_length : float
+        Shortest seed (m) that can have a back top (upholstered sofas).
+    back_top : float
+        Highest (m above the floor) a back top may be.
+    outer_margin : float
+        Around the parts that joined, the seed's object reaches only this far (m) beyond
+        the gaps of a sparse scan: their outer faces drop straight to the floor.
+    """
+
+    rise: tuple[float, float]
+    width: float
+    margin: float
+    share: float
+    back_reach: float
+    back_overhang: float
+    back_span: float
+    back_seat_length: float
+    back_top: float
+    outer_margin: float
+
+
+@dataclass(frozen=True)
+class LowSeed:
+    """How the cluster of a low seed (a seat found as a dense patch) takes in fragments.
+
+    Attributes
+    ----------
+    up_to : float
+        Seeds no higher than this (m) take fragments within ``margin`` of what they
+        claimed at their own height and close to the box of their whole cluster.
+    level : float
+        Voxels this close (m) to the seed's height are the seat as scanned.
+    margin : float
+        How far (m) from that the fragments may lie.
+    """
+
+    up_to: float
+    level: float
+    margin: float
+
+
+@dataclass(frozen=True)
+class SeedStyle:
+    """How a horizontal part that seeds segmentation claims the rest of its object.
+
+    Attributes
+    ----------
+    name : str
+    margin : float
+        How far (m) outside the part's outline its object may reach.
+    rise : float
+        How high (m) above the part its object may reach.
+    outside_cost : float
+        Extra path length per metre a voxel lies outside the outline.
+    inside_above : bool
+        Above the part only what lies inside its outline is the object's (a table:
+        a backrest beside its edge is something else).
+    attach : Attach or None
+        Narrow parts a little above it that join it (a seat's armrests); ``None``: none.
+    low : LowSeed or None
+        How a low seed's cluster takes in fragments beyond its prism; ``None``: it does not.
+    """
+
+    name: str
+    margin: float
+    rise: float
+    outside_cost: float
+    inside_above: bool = False
+    attach: Attach | None = None
+    low: LowSeed | None = None
 
 
 @dataclass(frozen=True)
@@ -141,6 +233,12 @@ class ObjectClass:
     #: Factor for an unexplained large horizontal plane (a second surface, not clutter);
     #: ``None``: the same as ``extra_plane``.
     extra_surface: float | None = None
+    #: Classes near which this one is more likely (the labelling's context term: a chair
+    #: near a table).
+    context: tuple[str, ...] = ()
+    #: Bounds of the factor CAD fitting may stretch a model's footprint by to the object's
+    #: measured seat or top; ``None``: the footprint keeps its generic size.
+    cad_scale: tuple[float, float] | None = None
 
     def part(self, name: str) -> Part:
         for p in self.parts:
@@ -155,6 +253,8 @@ class Ontology:
 
     classes: tuple[ObjectClass, ...]
     source: str | None = None
+    #: Seed styles by name (the file's ``seeds``).
+    seeds: Mapping[str, SeedStyle] = field(default_factory=dict)
 
     @property
     def names(self) -> list[str]:
@@ -177,7 +277,79 @@ class Ontology:
             if c.name not in by_name:
                 order.append(c.name)
             by_name[c.name] = c
-        return Ontology(tuple(by_name[n] for n in order), other.source or self.source)
+        return Ontology(
+            tuple(by_name[n] for n in order),
+            other.source or self.source,
+            {**self.seeds, **other.seeds},
+        )
+
+    def seed_styles(self) -> list[tuple[SeedStyle, float]]:
+        """Every seed style with the highest height its seed parts allow, lowest first.
+
+        A horizontal patch at height h takes the first style whose height reaches h,
+        and the last one when none does (see ``docs/ontology.md``).
+        """
+        tops: dict[str, float] = {}
+        for c in self.classes:
+            for p in c.parts:
+                if p.seed is not None:
+                    span = p.height_span
+                    top = math.inf if span is None else span[1]
+                    tops[p.seed] = max(tops.get(p.seed, -math.inf), top)
+        return sorted(((self.seeds[k], v) for k, v in tops.items()), key=lambda t: t[1])
+
+    def context_pairs(self) -> frozenset[tuple[str, str]]:
+        """Pairs of class names (both orders) that the context term rewards together."""
+        out = set()
+        for c in self.classes:
+            for other in c.context:
+                if other != c.name:
+                    out |= {(c.name, other), (other, c.name)}
+        return frozenset(out)
+
+    def cad_parts(self, label: str) -> dict[str, str]:
+        """Part name -> CAD role for the classes written under ``label``."""
+        out: dict[str, str] = {}
+        for c in self.classes:
+            if c.label == label:
+                for p in c.parts:
+                    if p.cad is not None:
+                        out.setdefault(p.name, p.cad)
+        return out
+
+    def cad_search(self, role: str, label: str | None = None) -> tuple[float, float] | None:
+        """Heights (m) where CAD fitting looks for a part of ``role``: the union of the
+        search heights of such parts of ``label``'s classes, or of every class when
+        ``label``'s have none (``None`` when no class has one)."""
+        for only in (label, None):
+            spans = [
+                p.cad_search or p.height_span
+                for c in self.classes
+                if only is None or c.label == only
+                for p in c.parts
+                if p.cad == role and (p.cad_search or p.height_span) is not None
+            ]
+            if spans:
+                return min(s[0] for s in spans), max(s[1] for s in spans)  # type: ignore[index]
+        return None
+
+    def cad_above_seat(self, label: str | None = None) -> float | None:
+        """How far (m) above the seat CAD fitting takes points as the backrest: the first
+        ``back`` part of ``label``'s classes that says, else of any class (``None``: none)."""
+        for only in (label, None):
+            for c in self.classes:
+                if only is None or c.label == only:
+                    for p in c.parts:
+                        if p.cad == "back" and p.cad_above_seat is not None:
+                            return p.cad_above_seat
+        return None
+
+    def cad_scale(self, label: str) -> tuple[float, float] | None:
+        """Footprint scale bounds for the models of ``label`` (its first class that has any)."""
+        for c in self.classes:
+            if c.label == label and c.cad_scale is not None:
+                return c.cad_scale
+        return None
 
 
 # ------------------------------------------------------------------------------------------
@@ -366,7 +538,7 @@ def _probability(
     return value
 
 
-def _part(name: str, spec: Any, path: tuple[Any, ...]) -> Part:
+def _part(name: str, spec: Any, path: tuple[Any, ...], seeds: Mapping[str, Any]) -> Part:
     spec = _mapping(spec, path)
     required = spec.get("required", True)
     if not isinstance(required, bool):
@@ -374,10 +546,119 @@ def _part(name: str, spec: Any, path: tuple[Any, ...]) -> Part:
     missing = _probability(spec, "missing", path, DEFAULT_MISSING[required])
     occluded = _probability(spec, "occluded", path)
     constraints = _constraints(
-        spec, PART_FEATURES, path, {"required", "missing", "occluded", "description"}
+        spec, PART_FEATURES, path, {"required", "missing", "occluded", "description", "seed", "cad"}
     )
+    seed = spec.get("seed")
+    if seed is not None:
+        if not isinstance(seed, str) or not seed:
+            raise _Problem(path + ("seed",), f"expected the name of a seed style, got {seed!r}")
+        if seed not in seeds:
+            known = ", ".join(sorted(seeds)) or "none"
+            raise _Problem(path + ("seed",), f"no seed style named {seed!r} (seeds: {known})")
+        height = constraints.get("height")
+        if height is None or height.side == "min":
+            raise _Problem(
+                path + ("seed",), "a seed part needs a height constraint with an upper end"
+            )
+    cad, search, above = _cad_role(spec.get("cad"), path + ("cad",))
     return Part(
-        name=name, constraints=constraints, required=required, missing=missing, occluded=occluded
+        name=name,
+        constraints=constraints,
+        required=required,
+        missing=missing,
+        occluded=occluded,
+        seed=seed,
+        cad=cad,
+        cad_search=search,
+        cad_above_seat=above,
+    )
+
+
+def _pair(value: Any, path: tuple[Any, ...], low: float = 0.0) -> tuple[float, float]:
+    """``[a, b]`` with ``low <= a < b``."""
+    if not isinstance(value, list) or len(value) != 2:
+        raise _Problem(path, f"expected [low, high], got {value!r}")
+    a, b = (_number(v, path + (i,)) for i, v in enumerate(value))
+    if not low <= a < b:
+        raise _Problem(path, f"expected {low:g} <= low < high, got [{a:g}, {b:g}]")
+    return a, b
+
+
+def _cad_role(
+    value: Any, path: tuple[Any, ...]
+) -> tuple[str | None, tuple[float, float] | None, float | None]:
+    """A part's ``cad``: a role name, or ``{role: name, search: [low, high], above_seat: h}``."""
+    if value is None:
+        return None, None, None
+    search = above = None
+    role_path = path
+    if isinstance(value, dict):
+        _only(value, {"role", "search", "above_seat"}, path)
+        if "search" in value:
+            search = _pair(value["search"], path + ("search",))
+        if "above_seat" in value:
+            above = _positive(value, "above_seat", path)
+        role_path = path + ("role",)
+        value = value.get("role")
+    if value not in CAD_ROLES:
+        raise _Problem(role_path, f"expected one of {', '.join(CAD_ROLES)}, got {value!r}")
+    if above is not None and value != "back":
+        raise _Problem(path + ("above_seat",), "only a back part has a height above the seat")
+    return value, search, above
+
+
+def _positive(spec: Mapping[str, Any], key: str, path: tuple[Any, ...]) -> float:
+    if key not in spec:
+        raise _Problem(path, f"missing key {key!r}")
+    value = _number(spec[key], path + (key,))
+    if value <= 0:
+        raise _Problem(path + (key,), f"expected a number > 0, got {value:g}")
+    return value
+
+
+def _attach(spec: Any, path: tuple[Any, ...]) -> Attach:
+    spec = _mapping(spec, path)
+    names = [
+        "width",
+        "margin",
+        "share",
+        "back_reach",
+        "back_overhang",
+        "back_span",
+        "back_seat_length",
+        "back_top",
+        "outer_margin",
+    ]
+    _only(spec, {"rise", "description", *names}, path)
+    if "rise" not in spec:
+        raise _Problem(path, "missing key 'rise'")
+    values = {k: _positive(spec, k, path) for k in names}
+    for k in ("share", "back_span"):
+        if values[k] > 1:
+            raise _Problem(path + (k,), f"expected a share in (0, 1], got {values[k]:g}")
+    return Attach(rise=_pair(spec["rise"], path + ("rise",)), **values)
+
+
+def _seed_style(name: str, spec: Any, path: tuple[Any, ...]) -> SeedStyle:
+    spec = _mapping(spec, path)
+    keys = {"margin", "rise", "outside_cost", "inside_above", "attach", "low", "description"}
+    _only(spec, keys, path)
+    low = None
+    if spec.get("low") is not None:
+        lspec = _mapping(spec["low"], path + ("low",))
+        _only(lspec, {"up_to", "level", "margin", "description"}, path + ("low",))
+        low = LowSeed(*(_positive(lspec, k, path + ("low",)) for k in ("up_to", "level", "margin")))
+    inside = spec.get("inside_above", False)
+    if not isinstance(inside, bool):
+        raise _Problem(path + ("inside_above",), f"expected true or false, got {inside!r}")
+    return SeedStyle(
+        name=name,
+        margin=_positive(spec, "margin", path),
+        rise=_positive(spec, "rise", path),
+        outside_cost=_positive(spec, "outside_cost", path),
+        inside_above=inside,
+        attach=None if spec.get("attach") is None else _attach(spec["attach"], path + ("attach",)),
+        low=low,
     )
 
 
@@ -442,7 +723,7 @@ def _prior(spec: Any, path: tuple[Any, ...]) -> tuple[Any, float | None, float |
     return rooms, out[0], out[1]
 
 
-def _class(name: str, spec: Any, path: tuple[Any, ...]) -> ObjectClass:
+def _class(name: str, spec: Any, path: tuple[Any, ...], seeds: Mapping[str, Any]) -> ObjectClass:
     spec = _mapping(spec, path)
     _only(
         spec,
@@ -458,13 +739,15 @@ def _class(name: str, spec: Any, path: tuple[Any, ...]) -> ObjectClass:
             "labeling",
             "extra_plane",
             "extra_surface",
+            "context",
+            "cad",
         },
         path,
     )
     parts_spec = _mapping(spec.get("parts"), path + ("parts",))
     if not parts_spec:
         raise _Problem(path + ("parts",), "a class needs at least one part")
-    parts = tuple(_part(str(n), s, path + ("parts", n)) for n, s in parts_spec.items())
+    parts = tuple(_part(str(n), s, path + ("parts", n), seeds) for n, s in parts_spec.items())
     rel_spec = spec.get("relations") or []
     if not isinstance(rel_spec, list):
         raise _Problem(path + ("relations",), "expected a list of relations")
@@ -486,6 +769,12 @@ def _class(name: str, spec: Any, path: tuple[Any, ...]) -> ObjectClass:
     label = spec.get("label", name)
     if not isinstance(label, str) or not label:
         raise _Problem(path + ("label",), f"expected a name, got {label!r}")
+    context = spec.get("context", [])
+    if not isinstance(context, list) or not all(isinstance(m, str) and m for m in context):
+        raise _Problem(path + ("context",), f"expected a list of class names, got {context!r}")
+    cad = _mapping(spec.get("cad"), path + ("cad",))
+    _only(cad, {"scale"}, path + ("cad",))
+    cad_scale = _pair(cad["scale"], path + ("cad", "scale")) if "scale" in cad else None
     return ObjectClass(
         name=name,
         label=label,
@@ -501,11 +790,21 @@ def _class(name: str, spec: Any, path: tuple[Any, ...]) -> ObjectClass:
         matches=tuple(matches),
         extra_plane=extra,
         extra_surface=surface,
+        context=tuple(context),
+        cad_scale=cad_scale,
     )
 
 
-def parse_ontology(text: str, source: str | PathLike[str] | None = None) -> Ontology:
+def parse_ontology(
+    text: str,
+    source: str | PathLike[str] | None = None,
+    *,
+    seeds: Mapping[str, SeedStyle] | None = None,
+) -> Ontology:
     """Parse and validate an ontology from YAML text.
+
+    ``seeds`` are seed styles defined elsewhere (the built-in file's) that the file's
+    parts may name besides its own.
 
     Raises
     ------
@@ -530,20 +829,27 @@ def parse_ontology(text: str, source: str | PathLike[str] | None = None) -> Onto
         data = _mapping(data, ())
         if data.get("format") != FORMAT:
             raise _Problem(("format",), f"expected format: {FORMAT}, got {data.get('format')!r}")
-        _only(data, {"format", "classes", "description"}, ())
+        _only(data, {"format", "classes", "description", "seeds"}, ())
+        own = {
+            str(n): _seed_style(str(n), v, ("seeds", n))
+            for n, v in _mapping(data.get("seeds"), ("seeds",)).items()
+        }
+        known = {**(seeds or {}), **own}
         classes_spec = _mapping(data.get("classes"), ("classes",))
         if not classes_spec:
             raise _Problem(("classes",), "an ontology needs at least one class")
-        classes = tuple(_class(str(n), s, ("classes", n)) for n, s in classes_spec.items())
+        classes = tuple(_class(str(n), s, ("classes", n), known) for n, s in classes_spec.items())
     except _Problem as exc:
         raise InvalidOntologyError(
             src, exc.message, line=exc.line or lines.line(exc.path), key=_dotted(exc.path)
         ) from exc
-    return Ontology(classes=classes, source=src)
+    return Ontology(classes=classes, source=src, seeds=own)
 
 
-def read_ontology_file(path: str | PathLike[str]) -> Ontology:
-    """Read and validate an ontology file."""
+def read_ontology_file(
+    path: str | PathLike[str], *, seeds: Mapping[str, SeedStyle] | None = None
+) -> Ontology:
+    """Read and validate an ontology file (``seeds``: see :func:`parse_ontology`)."""
     p = Path(path)
     try:
         text = p.read_text(encoding="utf-8")
@@ -551,4 +857,4 @@ def read_ontology_file(path: str | PathLike[str]) -> Ontology:
         raise InvalidOntologyError(p, "no such file") from exc
     except (OSError, UnicodeDecodeError) as exc:
         raise InvalidOntologyError(p, f"cannot read the file ({exc})") from exc
-    return parse_ontology(text, p)
+    return parse_ontology(text, p, seeds=seeds)

@@ -32,10 +32,10 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.special import logsumexp
 
+from ._features import CUT_MARGIN, FEATURES
 from ._gaussian import Gaussian
-from ._schema import PART_FEATURES, ObjectClass, Ontology, Part
+from ._schema import ObjectClass, Ontology, Part
 
 __all__ = [
     "ClassScore",
@@ -80,13 +80,6 @@ SHELTER_TOLERANCE = 0.05
 #: A part counts as hidden below a lifted cluster when the centre of its height
 #: constraint is less than this above the cluster's lowest point (m).
 HIDDEN_MARGIN = 0.1
-#: A cluster whose top comes this close (m) to the top of the search volume may go on
-#: above it (a cabinet or a shelf cut at the altitude cut-off) ...
-CUT_MARGIN = 0.05
-#: ... so its height is only known to be at least what is seen: its height factor is the
-#: mean of the constraint over this span (m) above the seen top.
-CUT_SPAN = 0.6
-CUT_SAMPLES = 13
 
 
 @dataclass(frozen=True)
@@ -131,6 +124,16 @@ class ClusterDescription:
     ceiling: float = math.inf
     hidden_below: float = -math.inf
     open_below: Sequence[float] | None = None
+    scene: Mapping[str, Sequence[float] | None] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        # ``open_below`` is the scene feature detect measures today; it joins the others.
+        if self.open_below is not None:
+            object.__setattr__(self, "scene", {**self.scene, "open_below": self.open_below})
+
+    def scene_values(self, feature: str) -> Sequence[float] | None:
+        """Per plane, the scene feature ``feature``, or ``None`` when it was not measured."""
+        return self.scene.get(feature)
 
     @property
     def cut(self) -> bool:
@@ -194,7 +197,7 @@ class ClusterScores:
 
 def part_values(desc: ClusterDescription, feature: str) -> NDArray[np.float64]:
     """(planes,) the value of a part feature for every plane of the cluster; NaN where it
-    was not measured (``open_below`` outside :func:`ontodetect.pipeline.describe_clusters`)."""
+    was not measured (a scene feature such as ``open_below`` the description lacks)."""
     return np.array(
         [_part_value(desc, i, feature) for i in range(len(desc.planes))], dtype=np.float64
     )
@@ -202,54 +205,41 @@ def part_values(desc: ClusterDescription, feature: str) -> NDArray[np.float64]:
 
 def _part_value(desc: ClusterDescription, i: int, feature: str) -> float:
     """:func:`part_values` of plane ``i`` alone."""
-    if feature == "open_below":
-        return math.nan if desc.open_below is None else float(desc.open_below[i])
-    return plane_feature(desc.planes[i], feature)
+    f = FEATURES["part"][feature]
+    if f.scene:
+        values = desc.scene_values(feature)
+        return math.nan if values is None else float(values[i])
+    return f.plane(desc.planes[i])  # type: ignore[misc]
 
 
 def plane_feature(plane: Any, feature: str) -> float:
-    """The value of a part feature (see ``PART_FEATURES``) for one plane (not
-    ``open_below``, which depends on the scene: :func:`part_values`)."""
-    if feature == "top":
-        return float(plane.z_max)
-    if feature == "bottom":
-        return float(plane.z_min)
-    if feature == "fill":
-        box = float(plane.length) * float(plane.width)
-        return float(plane.area) / box if box > 0 else 0.0
-    if feature == "points":
-        return float(plane.num_points)
-    return float(getattr(plane, feature))
+    """The value of a part feature (see ``PART_FEATURES``) for one plane (not a scene
+    feature such as ``open_below``, which depends on the scene: :func:`part_values`)."""
+    f = FEATURES["part"].get(feature)
+    if f is None or f.plane is None:
+        return float(getattr(plane, feature))
+    return f.plane(plane)
 
 
 def _relation_feature(desc: ClusterDescription, i: int, j: int, feature: str) -> float:
-    if feature == "gap":
-        return float(desc.planes[j].centroid[2] - desc.planes[i].centroid[2])
-    rel = desc.relations.get((min(i, j), max(i, j)))
-    if rel is None:
-        return math.inf if feature == "distance" else 0.0
-    if feature == "overlap":
-        return float(rel.xy_overlap)
-    return float(getattr(rel, feature))
+    return FEATURES["relation"][feature].relation(desc, i, j)  # type: ignore[misc]
 
 
 def _cluster_feature(desc: ClusterDescription, feature: str) -> float:
-    if feature == "planes":
-        return float(len(desc.planes))
-    return float(getattr(desc, feature))
+    return FEATURES["cluster"][feature].cluster(desc)  # type: ignore[misc]
 
 
 def cluster_log_factor(g: Gaussian, desc: ClusterDescription, feature: str) -> float:
-    """Log-factor of a cluster constraint; a height cut at the search volume is censored.
+    """Log-factor of a cluster constraint, by the feature's own rule when it has one.
 
     The height of a cluster that reaches the altitude cut-off is only known to be at
     least what is seen: the factor is the mean of the Gaussian over ``CUT_SPAN`` above
     it, so a class that is never that tall pays for it and one that may be does not.
     """
-    value = _cluster_feature(desc, feature)
-    if feature == "height" and desc.cut:
-        logs = np.asarray(g.log(np.linspace(value, value + CUT_SPAN, CUT_SAMPLES)))
-        return float(logsumexp(logs) - math.log(CUT_SAMPLES))
+    f = FEATURES["cluster"][feature]
+    value = f.cluster(desc)  # type: ignore[misc]
+    if f.log_factor is not None:
+        return f.log_factor(g, desc, value)
     return float(g.log(value))
 
 
@@ -391,17 +381,14 @@ def score_class(cls: ObjectClass, desc: ClusterDescription, log_prior: float = 0
             constraints.append(ConstraintValue(part.name, "missing", "De", None, None, missing[p]))
         else:
             for feature, g in part.constraints.items():
+                group = FEATURES["part"][feature].group
                 value = _part_value(desc, plane, feature)
                 if math.isnan(value):  # not measured: no factor
-                    constraints.append(
-                        ConstraintValue(part.name, feature, PART_FEATURES[feature], None, g, 1.0)
-                    )
+                    constraints.append(ConstraintValue(part.name, feature, group, None, g, 1.0))
                     continue
                 f = float(g(value))
-                groups[PART_FEATURES[feature]] *= f
-                constraints.append(
-                    ConstraintValue(part.name, feature, PART_FEATURES[feature], value, g, f)
-                )
+                groups[group] *= f
+                constraints.append(ConstraintValue(part.name, feature, group, value, g, f))
         factors[part.name] = groups
     for a, b, rel in rel_terms:
         ia, ib = best_assign[a], best_assign[b]

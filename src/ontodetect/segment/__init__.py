@@ -20,7 +20,7 @@ from ._cluster import (
     region_growing,
     relabel,
 )
-from ._parts import PartSeed, horizontal_parts, seeded_clusters
+from ._parts import PartSeed, horizontal_parts, seed_style, seeded_clusters
 from ._segmentation import (
     FLAGS,
     Box,
@@ -49,6 +49,7 @@ __all__ = [
     "radius_graph",
     "region_growing",
     "relabel",
+    "seed_style",
     "seeded_clusters",
     "segment",
     "upright_box",

@@ -33,6 +33,7 @@ beside it - within a short distance of its outline. So:
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -42,12 +43,11 @@ from scipy import ndimage, sparse
 from scipy.sparse.csgraph import connected_components, dijkstra
 from scipy.spatial import cKDTree
 
+from ..ontology import SeedStyle, builtin_ontology
 from ._cluster import relabel
 
-__all__ = ["PartSeed", "horizontal_parts", "seeded_clusters"]
+__all__ = ["PartSeed", "horizontal_parts", "seed_style", "seeded_clusters"]
 
-#: Table 4.1: height of seating plane 35–75 cm; parts above are table tops.
-SEAT_TOP = 0.75
 #: Extra cost of a step between neighbours whose normals differ, per unit of
 #: (1 - |cos angle|): moving from a seat onto the table beside it crosses folds.
 FOLD_PENALTY = 2.0
@@ -61,63 +61,17 @@ MAX_PART_VARIATION = 0.08
 #: the two leaves of a table).
 MERGE_STEP = 0.05
 MERGE_GAP = 0.06
-#: A part claims voxels up to this far (m) outside its outline: a seat's backrest leans
-#: back, its legs splay, armrests stand beside it; a table's legs and apron stand under
-#: its top, so what is beside the top (the backrest of a chair pushed against its
-#: edge) is not the table.
-SEAT_MARGIN = 0.3
-TOP_MARGIN = 0.05
-#: Within the margin, every metre outside the outline costs this much path length: a
-#: seat's parts may stick out, a table's hardly.
-SEAT_OUTSIDE_COST = 0.5
-TOP_OUTSIDE_COST = 20.0
 #: Heights within this (m) above a part count as the part itself (noise, thickness);
 #: above a top, only what lies this far inside its outline is the table's.
 ABOVE_TOLERANCE = 0.02
-#: A part's object reaches up to this high (m) above it: a seat carries a backrest;
-#: what stands on a table top (monitors, lamps, shelves) is not the table.
-SEAT_RISE = 0.8
-TOP_RISE = 0.15
 #: A fragment no part reached joins a part's cluster when it is this close (m) to it
 #: and at least this share of it lies in the part's prism.
 JOIN_DISTANCE = 0.25
 JOIN_SHARE = 0.6
-#: A part 10–45 cm above a seat, narrower than this (m) and mostly within the seat's
-#: outline grown by ``ARM_MARGIN``, is an armrest or the top of a backrest (sofas).
-#: Narrow means the widest disc that fits in it, not the short side of its box: the
-#: flat tops of a thick back and of the arms beside it touch and form one U- or
-#: L-shaped part whose box is as deep as the sofa.
-ARM_RISE = (0.1, 0.45)
-ARM_WIDTH = 0.6
-ARM_MARGIN = 0.25
-ARM_SHARE = 0.7
-#: The top of a sofa's backrest stands behind the back cushions, up to this far (m)
-#: from the seat; it spans the seat, being no longer than the seat plus its arms
-#: (``BACK_OVERHANG`` m) and at least ``BACK_SPAN`` of the seat's length (an end table
-#: beside an arm is shorter; a desk a chair stands at, longer). Backrests thick enough
-#: to show a horizontal top are upholstered sofas': seats at least ``BACK_SEAT_LENGTH``
-#: long (longer than a chair's, so that a small table beside a chair stays apart),
-#: backs no higher than ``BACK_TOP`` (m; a shelf above a low table is no backrest).
-BACK_REACH = 0.5
-BACK_OVERHANG = 0.5
-BACK_SPAN = 0.3
-BACK_SEAT_LENGTH = 0.8
-BACK_TOP = 0.95
 #: Points this close (m) to a voxel of a part, about the gaps of a sparse scan, lie on
 #: it: armrests and backrest tops stand outside a seat's box, and the box of an L-shaped
 #: seat is a diagonal rectangle that misses the ends of its arms.
 FOOTPRINT_GAP = 0.05
-#: Voxels of a seat's cluster this close (m) to its height are the seat as scanned.
-SEAT_LEVEL = 0.05
-#: Fragments join a seat's cluster within ``LEVEL_MARGIN`` (m) of what it claimed at its
-#: own height (a back leaning behind a seat seen in part), or within ``FOOTPRINT_GAP`` of
-#: its whole box (a back between two arms), for seats no higher than ``LOW_SEAT`` (m):
-#: parts at 60–75 cm are as often desk tops, whose clusters must not grow that way.
-LEVEL_MARGIN = 0.2
-LOW_SEAT = 0.6
-#: Around the armrests and back top that joined a seat its prism reaches only this far
-#: (m) beyond ``FOOTPRINT_GAP``: their outer faces drop straight to the floor.
-ATTACHED_MARGIN = 0.1
 #: Long regions are split by dividing the longest link they keep by this, repeatedly.
 SPLIT_STEP = 1.25
 
@@ -143,6 +97,9 @@ class PartSeed:
     attached : (j, 2) float, optional
         Horizontal positions of the armrests and backrest top that joined a seat:
         its prism reaches around them as well as around its box.
+    style : SeedStyle, optional
+        How it claims its object (the ontology's seed styles); ``None``: the built-in
+        ontology's style for its height (:func:`seed_style`).
     """
 
     voxels: NDArray[np.int64]
@@ -152,32 +109,38 @@ class PartSeed:
     axes: NDArray[np.float64]
     extent: NDArray[np.float64]
     attached: NDArray[np.float64] | None = field(default=None, repr=False, compare=False)
+    style: SeedStyle | None = field(default=None, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        if self.style is None:
+            object.__setattr__(self, "style", seed_style(self.height))
 
     @cached_property
     def _attached_tree(self) -> cKDTree | None:
-        if self.kind != "seat" or self.attached is None or len(self.attached) == 0:
+        if self.style.attach is None or self.attached is None or len(self.attached) == 0:
             return None
         return cKDTree(self.attached)
 
     @property
     def kind(self) -> str:
-        """ "seat" at seat height (Table 4.1: 35–75 cm), "top" above it."""
-        return "seat" if self.height <= SEAT_TOP else "top"
+        """The name of its seed style: with the built-in ontology "seat" at seat height
+        (Table 4.1: 35–75 cm), "top" above it."""
+        return self.style.name
 
     @property
     def rise(self) -> float:
         """How high (m) above the part its object may reach."""
-        return SEAT_RISE if self.kind == "seat" else TOP_RISE
+        return self.style.rise
 
     @property
     def margin(self) -> float:
         """How far (m) outside the part's outline its object may reach."""
-        return SEAT_MARGIN if self.kind == "seat" else TOP_MARGIN
+        return self.style.margin
 
     @property
     def outside_cost(self) -> float:
         """Extra path cost per metre a voxel lies outside the outline."""
-        return SEAT_OUTSIDE_COST if self.kind == "seat" else TOP_OUTSIDE_COST
+        return self.style.outside_cost
 
     def outside(self, points: NDArray[np.float64], signed: bool = False) -> NDArray[np.float64]:
         """(k,) float: horizontal distance (m) of points outside the outline.
@@ -206,21 +169,21 @@ class PartSeed:
 
         Above a table top only its outline counts: what stands beside it and rises
         above it (a chair's backrest against its edge) is something else. Around the
-        armrests and back top attached to a seat, ``ATTACHED_MARGIN`` applies.
+        armrests and back top attached to a seat, the style's ``attach.outer_margin`` applies.
         """
         margin = self.margin if margin is None else margin
         out = self._outside_outline(points, signed=True)
         above = points[:, 2] > self.height + ABOVE_TOLERANCE
         # The outline of a patch is known to about a voxel: above a top, only what is
         # clearly inside it counts.
-        allowed = np.where(above & (self.kind == "top"), -ABOVE_TOLERANCE, margin)
+        allowed = np.where(above & self.style.inside_above, -ABOVE_TOLERANCE, margin)
         inside = out <= allowed
         tree = self._attached_tree
         if tree is not None:
             # The outer faces of arms and of a thick back drop from their tops: what
             # stands further out (a console table behind the sofa) is something else.
             dist, _ = tree.query(points[:, :2], k=1)
-            inside |= dist <= FOOTPRINT_GAP + min(margin, ATTACHED_MARGIN)
+            inside |= dist <= FOOTPRINT_GAP + min(margin, self.style.attach.outer_margin)
         return inside & (points[:, 2] <= self.height + self.rise)
 
     def to_dict(self) -> dict:
@@ -232,6 +195,25 @@ class PartSeed:
             "extent": [round(float(v), 4) for v in self.extent],
             "num_voxels": len(self.voxels),
         }
+
+
+def seed_style(height: float, styles: Sequence[tuple[SeedStyle, float]] | None = None) -> SeedStyle:
+    """The seed style a horizontal part at ``height`` (m) takes: the first of ``styles``
+    (``(style, highest height)``, lowest first: :meth:`Ontology.seed_styles`) whose height
+    reaches it, the last when none does; ``styles`` defaults to the built-in ontology's.
+
+    Examples
+    --------
+    >>> seed_style(0.46).name, seed_style(0.74).name, seed_style(0.8).name
+    ('seat', 'seat', 'top')
+    """
+    styles = builtin_ontology().seed_styles() if styles is None else styles
+    if not styles:
+        raise ValueError("no seed styles: the ontology marks no part as a seed")
+    for style, top in styles:
+        if height <= top:
+            return style
+    return styles[-1][0]
 
 
 def _outline(xy: NDArray[np.float64]):
@@ -248,16 +230,18 @@ def _outline(xy: NDArray[np.float64]):
     return center, axes, hi - lo
 
 
-def _seed(vox, centers, voxel_area) -> PartSeed:
+def _seed(vox, centers, voxel_area, styles) -> PartSeed:
     vox = np.sort(vox).astype(np.int64)
     c, axes, ext = _outline(centers[vox, :2])
+    height = float(np.median(centers[vox, 2]))
     return PartSeed(
         vox,
-        float(np.median(centers[vox, 2])),
+        height,
         float(len(vox) * voxel_area),
         c,
         axes,
         ext,
+        style=seed_style(height, styles),
     )
 
 
@@ -273,6 +257,7 @@ def horizontal_parts(
     min_width: float,
     voxel_area: float,
     variation: NDArray[np.float64] | None = None,
+    styles: Sequence[tuple[SeedStyle, float]] | None = None,
 ) -> list[PartSeed]:
     """Horizontal patches at part height, largest first.
 
@@ -300,7 +285,14 @@ def horizontal_parts(
     variation : (m,) float, optional
         Surface variation of each voxel's neighbourhood (see ``estimate_normals``):
         voxels on edges and corners, whose normals are a blend, do not seed parts.
+    styles : sequence of (SeedStyle, float), optional
+        The ontology's seed styles (:meth:`~ontodetect.ontology.Ontology.seed_styles`),
+        which say how each patch claims its object; the built-in ontology's by default.
+        No styles, no seeds.
     """
+    styles = builtin_ontology().seed_styles() if styles is None else list(styles)
+    if not styles:
+        return []
     z = centers[:, 2]
     flat = (
         (np.abs(normals[:, 2]) >= np.cos(np.radians(tilt)))
@@ -318,21 +310,27 @@ def horizontal_parts(
     patches = _groups(comp)
     # Patches at one height that (nearly) touch are one part: cushions of a sofa.
     patches = _merge_close(patches, centers)
-    seeds = [_seed(p, centers, voxel_area) for p in patches]
+    seeds = [_seed(p, centers, voxel_area, styles) for p in patches]
     seeds = [s for s in seeds if s.area >= min_area and s.extent[1] >= min_width]
-    seeds = _merge_armrests(seeds, centers, voxel_area)
+    seeds = _merge_armrests(seeds, centers, voxel_area, styles)
     seeds.sort(key=lambda s: (-s.area, int(s.voxels[0])))
     return seeds
 
 
-def _merge_armrests(seeds: list[PartSeed], centers, voxel_area) -> list[PartSeed]:
-    """Narrow parts a little above a seat and within its prism are its armrests or back top."""
+def _merge_armrests(seeds: list[PartSeed], centers, voxel_area, styles) -> list[PartSeed]:
+    """Narrow parts a little above a seat and within its prism are its armrests or back top.
+
+    A part whose style ``attach``es them (a seat) takes, as :class:`Attach` says, parts
+    10–45 cm above it and narrower than an arm, mostly within its outline grown a little,
+    and the flat top of a thick upholstered back behind a long seat.
+    """
     seeds = sorted(seeds, key=lambda s: (-s.area, int(s.voxels[0])))
     merged: dict[int, list[int]] = {}
     taken = set()
     cell = float(np.sqrt(voxel_area))
     for i, low in enumerate(seeds):
-        if low.kind != "seat" or i in taken:
+        arm = low.style.attach
+        if arm is None or i in taken:
             continue
         # Near the seat's voxels counts as on it even outside its box (L-shaped seats).
         low_tree = cKDTree(centers[low.voxels, :2])
@@ -340,20 +338,22 @@ def _merge_armrests(seeds: list[PartSeed], centers, voxel_area) -> list[PartSeed
             if j == i or j in taken or j in merged:
                 continue
             rise = high.height - low.height
-            if not ARM_RISE[0] <= rise <= ARM_RISE[1]:
+            if not arm.rise[0] <= rise <= arm.rise[1]:
                 continue
-            if high.extent[1] > ARM_WIDTH and _width(centers[high.voxels, :2], cell) > ARM_WIDTH:
+            if high.extent[1] > arm.width and _width(centers[high.voxels, :2], cell) > arm.width:
                 continue
             near, _ = low_tree.query(centers[high.voxels, :2], k=1)
             out = np.minimum(low.outside(centers[high.voxels]), near - FOOTPRINT_GAP)
-            arm = np.mean(out <= ARM_MARGIN) >= ARM_SHARE
+            beside = np.mean(out <= arm.margin) >= arm.share
             back = (
-                low.extent[0] >= BACK_SEAT_LENGTH
-                and high.height <= BACK_TOP
-                and np.mean(out <= BACK_REACH) >= ARM_SHARE
-                and BACK_SPAN * low.extent[0] <= high.extent[0] <= low.extent[0] + BACK_OVERHANG
+                low.extent[0] >= arm.back_seat_length
+                and high.height <= arm.back_top
+                and np.mean(out <= arm.back_reach) >= arm.share
+                and arm.back_span * low.extent[0]
+                <= high.extent[0]
+                <= low.extent[0] + arm.back_overhang
             )
-            if arm or back:
+            if beside or back:
                 merged.setdefault(i, []).append(j)
                 taken.add(j)
     out = []
@@ -362,7 +362,7 @@ def _merge_armrests(seeds: list[PartSeed], centers, voxel_area) -> list[PartSeed
             continue
         if i in merged:
             vox = np.concatenate([sd.voxels] + [seeds[j].voxels for j in merged[i]])
-            grown = _seed(vox, centers, voxel_area)
+            grown = _seed(vox, centers, voxel_area, styles)
             # Keep the seat's own height and outline: the armrests only join its cluster.
             sd = PartSeed(
                 grown.voxels,
@@ -372,6 +372,7 @@ def _merge_armrests(seeds: list[PartSeed], centers, voxel_area) -> list[PartSeed
                 sd.axes,
                 sd.extent,
                 centers[np.concatenate([seeds[j].voxels for j in merged[i]]), :2],
+                style=sd.style,
             )
         out.append(sd)
     return out
@@ -583,9 +584,9 @@ def _join_fragments(labels, centers, seeds, n_seeds) -> None:
         if k not in boxes:
             s = seeds[k]
             mine = centers[labels == k]
-            level = mine[np.abs(mine[:, 2] - s.height) <= SEAT_LEVEL]
+            level = mine[np.abs(mine[:, 2] - s.height) <= s.style.low.level]
             boxes[k] = tuple(
-                PartSeed(s.voxels, s.height, s.area, *_outline(pts[:, :2]))
+                PartSeed(s.voxels, s.height, s.area, *_outline(pts[:, :2]), style=s.style)
                 for pts in (mine, level if len(level) else mine)
             )
         return boxes[k]
@@ -599,10 +600,13 @@ def _join_fragments(labels, centers, seeds, n_seeds) -> None:
         best, best_d = -1, np.inf
         for k in candidates:
             inside = seeds[k].in_prism(centers[frag])
-            if seeds[k].height <= LOW_SEAT:
+            low = seeds[k].style.low
+            if low is not None and seeds[k].height <= low.up_to:
+                # Within FOOTPRINT_GAP of its whole box (a back between two arms), or within
+                # ``low.margin`` of what it claimed at its own height.
                 whole, level = footprints(int(k))
                 inside |= whole.in_prism(centers[frag], margin=FOOTPRINT_GAP)
-                inside |= level.in_prism(centers[frag], margin=LEVEL_MARGIN)
+                inside |= level.in_prism(centers[frag], margin=low.margin)
             share = float(np.mean(inside))
             dk = float(dist[hit][owner[idx[hit]] == k].min())
             if share >= JOIN_SHARE and dk < best_d:

@@ -15,6 +15,7 @@ from .._progress import progress
 from ..cloud import PointCloud, point_cloud
 from ..config import Config
 from ..errors import InvalidParameterError
+from ..ontology import Ontology, builtin_ontology
 from ..preprocess import Ground, PreparedScene, graph_normals, prepare
 from ._cluster import core_neighbors, dbscan, euclidean_clusters, radius_graph, region_growing
 from ._parts import PartSeed, horizontal_parts, seeded_clusters
@@ -373,6 +374,7 @@ def cluster(
     *,
     seed: int | None = 0,
     fit_planes: bool = True,
+    ontology: Ontology | None = None,
 ) -> Segmentation:
     """Cluster the object voxels of a prepared scene and fit planes in each cluster.
 
@@ -388,6 +390,9 @@ def cluster(
         do not depend on the number or order of clusters).
     fit_planes : bool
         Fit MSAC planes in every cluster (False: clusters only, for tuning).
+    ontology : Ontology, optional
+        Its parts marked ``seed`` say which horizontal patches seed clusters and how
+        (``method: parts``); the built-in ontology by default.
 
     Returns
     -------
@@ -449,6 +454,7 @@ def cluster(
                     min_width=cc.min_part_width,
                     voxel_area=voxel_area,
                     variation=part_variation,
+                    styles=(ontology or builtin_ontology()).seed_styles(),
                 )
                 labels, seed_of = seeded_clusters(
                     centers,
@@ -565,6 +571,7 @@ def segment(
     scale: float | None = None,
     fit_planes: bool = True,
     ground: Ground | None = None,
+    ontology: Ontology | None = None,
 ) -> Segmentation:
     """Prepare a scan and cluster it: the one-call API of steps 1–9 of Algorithm 1.
 
@@ -585,6 +592,8 @@ def segment(
     ground : Ground, optional
         This cloud's :func:`ontodetect.preprocess.find_ground`, shared by passes that
         differ only in ``prepare.turn`` (see :func:`ontodetect.preprocess.prepare`).
+    ontology : Ontology, optional
+        Which parts seed clusters (see :func:`cluster`); the built-in one by default.
 
     Returns
     -------
@@ -604,4 +613,4 @@ def segment(
     if not isinstance(cloud, PointCloud):
         cloud = point_cloud(cloud)
     prepared = prepare(cloud, config, up=up, scale=scale, seed=seed, ground=ground)
-    return cluster(prepared, config, seed=seed, fit_planes=fit_planes)
+    return cluster(prepared, config, seed=seed, fit_planes=fit_planes, ontology=ontology)

@@ -43,7 +43,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidParameterError
-from . import meshes as M
+from ..geometry import _mesh as M
 from .scene import OrientedBox, SceneObject, yaw_pose
 
 __all__ = [

@@ -31,7 +31,7 @@ from numpy.typing import NDArray
 
 from .._progress import progress
 from ..errors import InvalidParameterError
-from . import meshes as M
+from ..geometry import _mesh as M
 from .furniture import make_furniture, part_boxes, place
 from .scene import OrientedBox, Scene, SceneObject, yaw_pose
 

@@ -1,9 +1,14 @@
-"""Closed triangle meshes of simple solids, the bricks furniture is built from.
+"""Closed triangle meshes of simple solids, the bricks furniture and CAD models are built from.
 
 Every builder returns a :class:`Mesh` that encloses a volume: it is watertight,
 its triangles are wound consistently and its normals point outwards (counter-
 clockwise seen from outside). Virtual sensors ray-cast these meshes, so each
 part of a piece of furniture must be a real solid with a thickness, not a sheet.
+The generic CAD models (:mod:`ontodetect.cad`) and the simulator
+(:mod:`ontodetect.synth`) share them. Boxes, extrusions, solids of revolution and
+tori come from ``trimesh.creation`` (imported when a mesh is first built); the
+shapes it lacks (any eight corners, superellipsoids, swept tubes, thick sheets)
+are built here.
 
 Builders, all in metres:
 
@@ -24,6 +29,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -187,8 +193,13 @@ def hexahedron(corners: ArrayLike) -> Mesh:
     return _outward(c, _HEX_TRIANGLES)
 
 
+def _from_trimesh(mesh: Any) -> Mesh:
+    """A :class:`Mesh` from a ``trimesh.Trimesh``, its normals turned outwards."""
+    return _outward(np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces))
+
+
 def box(size: ArrayLike, center: ArrayLike = (0.0, 0.0, 0.0)) -> Mesh:
-    """An axis-aligned box of (3,) ``size`` centred on ``center``.
+    """An axis-aligned box of (3,) ``size`` centred on ``center`` (``trimesh.creation.box``).
 
     Examples
     --------
@@ -196,16 +207,17 @@ def box(size: ArrayLike, center: ArrayLike = (0.0, 0.0, 0.0)) -> Mesh:
     >>> len(b.vertices), len(b.triangles), round(b.volume, 6)
     (8, 12, 2.0)
     """
+    from trimesh.creation import box as trimesh_box  # lazy: trimesh only to build meshes
+
     s = _positive("size", size)
-    return hexahedron((_UNIT_CORNERS - 0.5) * s + np.asarray(center, dtype=np.float64))
+    return _from_trimesh(trimesh_box(extents=s)).translated(center)
 
 
 def box_between(low: ArrayLike, high: ArrayLike) -> Mesh:
     """An axis-aligned box from its (3,) lowest to its (3,) highest corner."""
     lo = np.asarray(low, dtype=np.float64)
     hi = np.asarray(high, dtype=np.float64)
-    _positive("high - low", hi - lo)
-    return hexahedron(lo + _UNIT_CORNERS * (hi - lo))
+    return box(_positive("high - low", hi - lo), (lo + hi) / 2)
 
 
 def tapered_box(
@@ -256,26 +268,19 @@ def prism(polygon: ArrayLike, z0: float, z1: float) -> Mesh:
     >>> round(tri.volume, 6)
     1.0
     """
+    from trimesh.creation import extrude_triangulation  # lazy: trimesh only to build meshes
+
     p = np.asarray(polygon, dtype=np.float64)
     if p.ndim != 2 or p.shape[1] != 2 or len(p) < 3:
         raise InvalidParameterError("polygon", "an array of shape (k, 2) with k >= 3", p.shape)
-    _positive("z1 - z0", z1 - z0)
-    k = len(p)
-    vertices = np.concatenate(
-        [np.column_stack([p, np.full(k, z0)]), np.column_stack([p, np.full(k, z1)])]
-    )
-    i = np.arange(k)
-    j = (i + 1) % k
-    fan = np.arange(1, k - 1)
-    triangles = np.concatenate(
-        [
-            np.column_stack([np.zeros(k - 2, int), fan + 1, fan]),  # bottom, seen from below
-            np.column_stack([np.full(k - 2, k), fan + k, fan + k + 1]),  # top
-            np.column_stack([i, j, j + k]),
-            np.column_stack([i, j + k, i + k]),
-        ]
-    )
-    return _outward(vertices, triangles)
+    height = float(_positive("z1 - z0", z1 - z0))
+    # A convex polygon is a fan from its first corner; trimesh wants it counter-clockwise.
+    (ax, ay), (bx, by) = p[1] - p[0], p[2] - p[0]
+    if ax * by - ay * bx < 0:
+        p = p[::-1]
+    fan = np.arange(1, len(p) - 1)
+    faces = np.column_stack([np.zeros(len(fan), int), fan, fan + 1])
+    return _from_trimesh(extrude_triangulation(p, faces, height)).translated((0.0, 0.0, z0))
 
 
 def rounded_box(
@@ -345,30 +350,16 @@ def lathe(profile: ArrayLike, segments: int = DEFAULT_SEGMENTS, closed: bool = F
     if np.any(p[:, 0] < 0):
         raise InvalidParameterError("profile", "radii >= 0", p[:, 0].min())
     on_axis = p[:, 0] <= _AXIS_TOLERANCE
-    if closed:
-        if on_axis.any():
-            raise InvalidParameterError(
-                "profile", "off the axis when closed", "a point at radius 0"
-            )
-        body = p
-    else:
-        if not (on_axis[0] and on_axis[-1]) or on_axis[1:-1].any():
-            raise InvalidParameterError(
-                "profile", "on the axis (radius 0) at both ends and only there", p[:, 0].tolist()
-            )
-        body = p[1:-1]
-    a = np.linspace(0.0, 2 * np.pi, segments, endpoint=False)
-    rings = np.stack(
-        [
-            np.cos(a)[None, :] * body[:, :1],
-            np.sin(a)[None, :] * body[:, :1],
-            np.broadcast_to(body[:, 1:], (len(body), segments)),
-        ],
-        axis=-1,
-    )
-    if closed:
-        return _ring_mesh(rings, closed=True)
-    return _ring_mesh(rings, start=[0.0, 0.0, p[0, 1]], end=[0.0, 0.0, p[-1, 1]])
+    if closed and on_axis.any():
+        raise InvalidParameterError("profile", "off the axis when closed", "a point at radius 0")
+    if not closed and (not (on_axis[0] and on_axis[-1]) or on_axis[1:-1].any()):
+        raise InvalidParameterError(
+            "profile", "on the axis (radius 0) at both ends and only there", p[:, 0].tolist()
+        )
+    from trimesh.creation import revolve  # lazy: trimesh only to build meshes
+
+    line = np.vstack([p, p[:1]]) if closed else p
+    return _from_trimesh(revolve(line, sections=segments))
 
 
 def cylinder(
@@ -425,11 +416,14 @@ def torus(
     major_radius: float, minor_radius: float, segments: int = 32, minor_segments: int = 10
 ) -> Mesh:
     """A ring about the z axis in the plane z = 0 (e.g. the footrest of a bar stool)."""
+    from trimesh.creation import torus as trimesh_torus  # lazy: trimesh only to build meshes
+
     R, r = (float(v) for v in _positive("radius", [major_radius, minor_radius]))
     if r >= R:
         raise InvalidParameterError("minor_radius", f"smaller than major_radius ({R})", r)
-    a = np.linspace(0.0, 2 * np.pi, minor_segments, endpoint=False)
-    return lathe(np.column_stack([R + r * np.cos(a), r * np.sin(a)]), segments, closed=True)
+    return _from_trimesh(
+        trimesh_torus(R, r, major_sections=segments, minor_sections=minor_segments)
+    )
 
 
 def superellipsoid(

@@ -1,0 +1,259 @@
+"""The features an ontology file may constrain, registered by name (thesis Eq. 3.3).
+
+Every feature is a :class:`Feature`: where it applies (a part, a pair of parts, the
+whole cluster), how it is measured on a cluster, how a Gaussian on it scores, and the
+smallest sigma calibration may fit to it. The schema accepts exactly the registered
+names and the scoring looks each one up here, so a new feature is one
+:func:`register_feature` call, never a branch in the scoring::
+
+    register_feature(Feature("slope", "part", "Or", "...", plane=lambda p: float(p.slope)))
+
+Part features are measured on one plane (``plane``) or, when they depend on the scene
+around the cluster (whether the floor shows under a top), read from the cluster
+description's per-plane scene measurements (``scene=True``, see
+:attr:`~ontodetect.ontology.ClusterDescription.scene`): NaN there means not measured,
+which costs nothing.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ._gaussian import Gaussian
+
+__all__ = [
+    "CLUSTER_FEATURES",
+    "FEATURES",
+    "PART_FEATURES",
+    "RELATION_FEATURES",
+    "SCOPES",
+    "Feature",
+    "feature_registry",
+    "register_feature",
+    "sigma_floor",
+]
+
+#: Where a feature applies: a part (one plane), a relation (two parts) or the cluster.
+SCOPES = ("part", "relation", "cluster")
+#: A cluster whose top comes this close (m) to the top of the search volume may go on
+#: above it (a cabinet or a shelf cut at the altitude cut-off) ...
+CUT_MARGIN = 0.05
+#: ... so its height is only known to be at least what is seen: its height factor is the
+#: mean of the constraint over this span (m) above the seen top.
+CUT_SPAN = 0.6
+CUT_SAMPLES = 13
+
+
+@dataclass(frozen=True)
+class Feature:
+    """One feature of the ontology, found by its scope and name.
+
+    Attributes
+    ----------
+    name : str
+        The key in the ontology file.
+    scope : {"part", "relation", "cluster"}
+    group : str
+        The factor of Eq. 3.3 a part feature belongs to (``Or``, ``He``, ``De``, ``Pr``);
+        ``Pr`` for relations, ``cluster`` for cluster features.
+    description : str
+        What is measured, with its unit.
+    sigma_floor : float
+        Calibration fits no sigma below this (units of the feature).
+    plane : callable, optional
+        Part features: ``plane -> float``, the value on one plane.
+    scene : bool
+        Part features: the value comes from the cluster description's scene
+        measurements (``desc.scene[name][i]``), not from the plane.
+    relation : callable, optional
+        Relation features: ``(desc, i, j) -> float`` for planes ``i`` (part a), ``j`` (b).
+    cluster : callable, optional
+        Cluster features: ``desc -> float``.
+    log_factor : callable, optional
+        ``(gaussian, desc, value) -> float``, the log-factor when it is not
+        ``gaussian.log(value)`` (a censored measurement).
+    """
+
+    name: str
+    scope: str
+    group: str
+    description: str
+    sigma_floor: float = 0.0
+    plane: Callable[[Any], float] | None = None
+    scene: bool = False
+    relation: Callable[[Any, int, int], float] | None = None
+    cluster: Callable[[Any], float] | None = None
+    log_factor: Callable[[Gaussian, Any, float], float] | None = None
+
+    def __post_init__(self) -> None:
+        if self.scope not in SCOPES:
+            raise ValueError(f"scope must be one of {SCOPES}, got {self.scope!r}")
+        measures = {
+            "part": self.plane is not None or self.scene,
+            "relation": self.relation is not None,
+            "cluster": self.cluster is not None,
+        }
+        if not measures[self.scope]:
+            raise ValueError(f"feature {self.name!r}: a {self.scope} feature needs a measure")
+
+
+#: The registry: scope -> name -> Feature.
+FEATURES: dict[str, dict[str, Feature]] = {scope: {} for scope in SCOPES}
+
+
+def register_feature(feature: Feature, *, replace: bool = False) -> Feature:
+    """Add a feature to the registry (``replace`` to redefine an existing one)."""
+    table = FEATURES[feature.scope]
+    if feature.name in table and not replace:
+        raise ValueError(f"a {feature.scope} feature named {feature.name!r} is registered")
+    table[feature.name] = feature
+    return feature
+
+
+def feature_registry(scope: str | None = None) -> Mapping[str, Any]:
+    """The registered features: ``{scope: {name: Feature}}``, or one scope's ``{name: Feature}``.
+
+    Examples
+    --------
+    >>> feature_registry("part")["tilt"].group
+    'Or'
+    >>> feature_registry("cluster")["height"].sigma_floor
+    0.02
+    """
+    if scope is None:
+        return FEATURES
+    return FEATURES[scope]
+
+
+def sigma_floor(name: str) -> float:
+    """The smallest sigma calibration may fit to a feature of this name (0 if none).
+
+    A name used in several scopes (``height`` of a part and of a cluster) has one floor.
+    """
+    return max((t[name].sigma_floor for t in FEATURES.values() if name in t), default=0.0)
+
+
+# -- measures --------------------------------------------------------------------------------
+
+
+def _fill(plane: Any) -> float:
+    box = float(plane.length) * float(plane.width)
+    return float(plane.area) / box if box > 0 else 0.0
+
+
+def _attribute(name: str) -> Callable[[Any], float]:
+    return lambda obj: float(getattr(obj, name))
+
+
+def _relation_attribute(name: str, absent: float) -> Callable[[Any, int, int], float]:
+    def measure(desc: Any, i: int, j: int) -> float:
+        rel = desc.relations.get((min(i, j), max(i, j)))
+        return absent if rel is None else float(getattr(rel, name))
+
+    return measure
+
+
+def _gap(desc: Any, i: int, j: int) -> float:
+    return float(desc.planes[j].centroid[2] - desc.planes[i].centroid[2])
+
+
+def _censored_height(g: Gaussian, desc: Any, value: float) -> float:
+    """The height of a cluster that reaches the altitude cut-off is only known to be at
+    least what is seen: the mean of the Gaussian over ``CUT_SPAN`` above it."""
+    if not desc.cut:
+        return float(g.log(value))
+    from scipy.special import logsumexp  # lazy: scipy.special only when a cluster is cut
+
+    logs = np.asarray(g.log(np.linspace(value, value + CUT_SPAN, CUT_SAMPLES)))
+    return float(logsumexp(logs) - math.log(CUT_SAMPLES))
+
+
+# The sigma floors are calibration's absolute floors (units of the feature: m, degrees,
+# m², ratios), chosen for the resolution of the measurements; ``density`` and ``points``
+# depend on the sensor and have none.
+for _feature in (
+    Feature(
+        "tilt", "part", "Or", "degrees between the plane's normal and vertical: 0 = horizontal",
+        1.0, plane=_attribute("tilt"),
+    ),
+    Feature("height", "part", "He", "centroid height above the floor (m)", 0.02,
+            plane=_attribute("height")),
+    Feature("top", "part", "He", "highest inlier above the floor (m)", 0.02,
+            plane=_attribute("z_max")),
+    Feature("bottom", "part", "He", "lowest inlier above the floor (m)", 0.02,
+            plane=_attribute("z_min")),
+    Feature("length", "part", "Pr", "extent along the plane's major axis (m)", 0.03,
+            plane=_attribute("length")),
+    Feature("width", "part", "Pr", "extent along its minor axis (m)", 0.03,
+            plane=_attribute("width")),
+    Feature("area", "part", "Pr", "covered area (m²)", 0.01, plane=_attribute("area")),
+    Feature("fill", "part", "De", "covered area / (length × width): how solid the patch is",
+            0.03, plane=_fill),
+    Feature("density", "part", "De", "points per m² (depends on the sensor)",
+            plane=_attribute("density")),
+    Feature("points", "part", "De", "inlier count (depends on the sensor)",
+            plane=_attribute("num_points")),
+    # Open below (a top on legs) or closed (a cabinet, a bed, a box hide the floor under
+    # them). Measured by detect for horizontal planes; unknown elsewhere, costing nothing.
+    Feature("open_below", "part", "Pr",
+            "share of the plane's footprint under which the floor was seen (0..1)", 0.03,
+            scene=True),
+    Feature("angle", "relation", "Pr", "angle between the normals, folded to [0, 90] degrees",
+            2.0, relation=_relation_attribute("angle", 0.0)),
+    Feature("distance", "relation", "Pr",
+            "closest distance between the two planes' points (m)", 0.01,
+            relation=_relation_attribute("distance", math.inf)),
+    Feature("gap", "relation", "Pr", "height of b's centroid minus a's (m)", 0.02,
+            relation=_gap),
+    Feature("overlap", "relation", "Pr",
+            "share of the smaller footprint the two overlap in the xy plane (0..1)", 0.03,
+            relation=_relation_attribute("xy_overlap", 0.0)),
+    Feature("length", "cluster", "cluster", "longest horizontal side of the upright box (m)",
+            0.03, cluster=_attribute("length")),
+    Feature("breadth", "cluster", "cluster", "shortest horizontal side of the upright box (m)",
+            0.03, cluster=_attribute("breadth")),
+    Feature("height", "cluster", "cluster", "top of the cluster above the floor (m)", 0.02,
+            cluster=_attribute("height"), log_factor=_censored_height),
+    Feature("bottom", "cluster", "cluster", "lowest point above the floor (m)", 0.02,
+            cluster=_attribute("bottom")),
+    Feature("planes", "cluster", "cluster", "number of planes found in the cluster", 0.5,
+            cluster=lambda desc: float(len(desc.planes))),
+    Feature("rise", "cluster", "cluster",
+            "height of the cluster above its highest horizontal plane (m): a backrest rises "
+            "above a seat, nothing rises above a cabinet top", 0.02,
+            cluster=_attribute("rise")),
+):  # fmt: skip
+    register_feature(_feature)
+del _feature
+
+
+class _View(Mapping[str, str]):
+    """A live ``name -> text`` view of one scope of the registry."""
+
+    def __init__(self, scope: str, what: Callable[[Feature], str]) -> None:
+        self._scope, self._what = scope, what
+
+    def __getitem__(self, name: str) -> str:
+        return self._what(FEATURES[self._scope][name])
+
+    def __iter__(self):
+        return iter(FEATURES[self._scope])
+
+    def __len__(self) -> int:
+        return len(FEATURES[self._scope])
+
+    def __repr__(self) -> str:
+        return repr(dict(self))
+
+
+#: Part features and the factor of Eq. 3.3 each belongs to (a view of the registry).
+PART_FEATURES: Mapping[str, str] = _View("part", lambda f: f.group)
+#: Relation features ``between: [a, b]`` and what they measure.
+RELATION_FEATURES: Mapping[str, str] = _View("relation", lambda f: f.description)
+#: Cluster features and what they measure.
+CLUSTER_FEATURES: Mapping[str, str] = _View("cluster", lambda f: f.description)

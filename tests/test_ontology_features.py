@@ -1,0 +1,122 @@
+"""The feature registry: features found by name, one call to add one."""
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from ontodetect.errors import InvalidOntologyError
+from ontodetect.ontology import (
+    CLUSTER_FEATURES,
+    PART_FEATURES,
+    RELATION_FEATURES,
+    Feature,
+    feature_registry,
+    parse_ontology,
+    register_feature,
+    score_class,
+    sigma_floor,
+)
+from ontodetect.ontology._features import FEATURES
+from test_ontology import P, cluster
+
+
+@pytest.fixture
+def slope():
+    """A part feature registered for one test and removed after it."""
+    f = register_feature(
+        Feature("slope", "part", "Or", "tilt again (degrees)", 1.5, plane=lambda p: p.tilt)
+    )
+    yield f
+    del FEATURES["part"]["slope"]
+
+
+def test_every_scope_lists_its_features():
+    assert set(PART_FEATURES) == set(feature_registry("part"))
+    assert PART_FEATURES["tilt"] == "Or" and PART_FEATURES["open_below"] == "Pr"
+    assert "gap" in RELATION_FEATURES and "rise" in CLUSTER_FEATURES
+    assert feature_registry()["cluster"]["height"].log_factor is not None
+    assert feature_registry("part")["open_below"].scene
+
+
+def test_sigma_floors_are_those_calibration_used():
+    """The absolute floors calibration kept beside it (evaluation._calibrate.ABS_SIGMA_FLOOR
+    on 2026-11-24) are the registry's, and only these features have one."""
+    floors = {
+        "tilt": 1.0,
+        "angle": 2.0,
+        "height": 0.02,
+        "top": 0.02,
+        "bottom": 0.02,
+        "gap": 0.02,
+        "distance": 0.01,
+        "length": 0.03,
+        "width": 0.03,
+        "breadth": 0.03,
+        "area": 0.01,
+        "fill": 0.03,
+        "open_below": 0.03,
+        "overlap": 0.03,
+        "rise": 0.02,
+        "planes": 0.5,
+    }
+    for name, floor in floors.items():
+        assert sigma_floor(name) == floor, name
+    names = {n for table in FEATURES.values() for n in table}
+    assert {n for n in names if sigma_floor(n) > 0} == set(floors)
+    assert sigma_floor("density") == sigma_floor("points") == sigma_floor("nothing") == 0.0
+
+
+def test_a_registered_feature_is_accepted_by_the_schema_and_scored(slope):
+    text = """
+format: ontodetect.ontology/1
+classes:
+  plank:
+    parts:
+      board: {slope: {max: 5}}
+"""
+    plank = parse_ontology(text)["plank"]
+    flat = score_class(plank, cluster([P(0.0, 0.5, 1.0, 0.3)], length=1.0))
+    steep = score_class(plank, cluster([P(40.0, 0.5, 1.0, 0.3)], length=1.0))
+    (cv,) = [c for c in flat.constraints if c.feature == "slope"]
+    assert cv.group == "Or" and cv.value == 0.0 and cv.factor == 1.0
+    assert steep.log_likelihood < flat.log_likelihood - 1.0
+    assert sigma_floor("slope") == 1.5
+
+
+def test_an_unregistered_feature_is_an_error_naming_the_key():
+    with pytest.raises(InvalidOntologyError, match=r"classes\.plank\.parts\.board\.slope"):
+        parse_ontology(
+            "format: ontodetect.ontology/1\nclasses:\n  plank:\n"
+            "    parts:\n      board: {slope: {max: 5}}\n",
+            "plank.yaml",
+        )
+
+
+def test_a_scene_feature_reads_the_description_and_costs_nothing_when_absent():
+    register_feature(Feature("wet", "part", "De", "share wet", scene=True))
+    try:
+        o = parse_ontology(
+            "format: ontodetect.ontology/1\nclasses:\n  dry:\n"
+            "    parts:\n      top: {wet: {max: 0.1}}\n"
+        )
+        desc = cluster([P(0.0, 0.7, 1.0, 0.6)], length=1.0)
+        unknown = score_class(o["dry"], desc)
+        wet = score_class(o["dry"], replace(desc, scene={"wet": [0.9]}))
+        assert unknown.assignment["top"] == 0 and unknown.factors["top"]["De"] == 1.0
+        assert wet.log_likelihood < unknown.log_likelihood - 1.0
+    finally:
+        del FEATURES["part"]["wet"]
+
+
+def test_registering_twice_or_without_a_measure_is_refused():
+    with pytest.raises(ValueError, match="registered"):
+        register_feature(Feature("tilt", "part", "Or", "again", plane=lambda p: 0.0))
+    with pytest.raises(ValueError, match="needs a measure"):
+        Feature("x", "cluster", "cluster", "nothing")
+    with pytest.raises(ValueError, match="scope"):
+        Feature("x", "room", "cluster", "nothing", cluster=lambda d: 0.0)
+    two = cluster([P(0.0, 0.5, 1.0, 0.3), P(90.0, 0.8, 1.0, 0.3)], length=1.0)
+    assert math.isinf(FEATURES["relation"]["distance"].relation(two, 0, 1))  # no relation
+    assert np.isfinite(sigma_floor("tilt"))
