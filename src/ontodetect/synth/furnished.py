@@ -47,7 +47,7 @@ import yaml
 from numpy.typing import NDArray
 
 from ..errors import CorruptFileError, InvalidParameterError, ReadError
-from . import meshes as M
+from ..geometry import _mesh as M
 from .furniture import place
 from .rooms import _WALL_YAW, CONTACT_TOLERANCE, _box_rows, _overlapping, build_shell
 from .scene import CLASS_IDS, OrientedBox, Scene, SceneObject
