@@ -85,6 +85,8 @@ MIN_SEEDS = 7
 #: Fused RGB-D walk averaged on this grid (m) stands in for ScanNet's reconstructed mesh,
 #: whose vertices VoteNet's files sample: ~1.5 cm apart, 250-350k points in a 20 m² room.
 DENSE_VOXEL = 0.015
+#: Options of the ``rgbd`` sensor for the dense fused scan (its defaults otherwise: 24 frames).
+DENSE_SCAN: dict[str, Any] = {"voxel": DENSE_VOXEL}
 #: Points of a ScanNet-like scan and of a single frame (the frame's stride comes closest).
 POINTS = 50_000
 #: Variants of a room's scan: name -> (sensor, artefacts applied to the dense fused scan).
@@ -217,7 +219,7 @@ def cache_key(source: RoomSource, scans: Sequence[SimScan]) -> dict[str, Any]:
         "room_types": list(source.room_types),
         "scans": [s.name for s in scans],
         "variants": {k: [v[0], list(v[1])] for k, v in VARIANTS.items()},
-        "dense_voxel": DENSE_VOXEL,
+        "dense_scan": DENSE_SCAN,
         "points": POINTS,
         "ontodetect": __version__,
         "synth_sources": _source_digest(),
@@ -239,7 +241,7 @@ def generate_scan(unit: tuple[str, SimScan, str]) -> dict[str, Any]:
     if sensor == "rgbd-frame":
         result = synthesize(scene, sensor, seed=scan.seed, points=POINTS)
     else:
-        result = synthesize(scene, sensor, seed=scan.seed, voxel=DENSE_VOXEL)
+        result = synthesize(scene, sensor, seed=scan.seed, **DENSE_SCAN)
         rng = _artefact_rng(scan)
         out = result.output
         # The triangle each point came from rides along as a field, so objects.json's
