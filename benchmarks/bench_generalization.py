@@ -463,9 +463,12 @@ def richest(outcomes: Sequence[SceneOutcome], count: int, *, one_per: Callable |
 
 # -- printing ------------------------------------------------------------------------------
 def _pr(fig: Mapping[str, Any]) -> str:
+    """``P / R``; a precision without detections and a recall without objects are ``-``."""
     if not fig["gt"] and not fig["det"]:
         return "-"
-    return f"{fig['precision']:.2f} / {fig['recall']:.2f}"
+    p = f"{fig['precision']:.2f}" if fig["det"] else "-"
+    r = f"{fig['recall']:.2f}" if fig["gt"] else "-"
+    return f"{p} / {r}"
 
 
 def class_table(title: str, figures: Mapping[str, Mapping[str, Any]]) -> Table:
