@@ -203,13 +203,31 @@ def simulated_set(room_types: Sequence[str], *, quick: bool = False) -> list[Sim
 
 
 def _source_digest() -> str:
-    """Digest of the simulator's sources: a changed generator makes a new cache."""
+    """Digest of the simulator's sources and class tables: a changed generator makes a new
+    cache."""
     import ontodetect.synth
 
+    synth = Path(ontodetect.synth.__file__).parent
+    files = sorted(synth.glob("*.py")) + sorted((synth.parent / "data").glob("sh3d*"))
     h = hashlib.sha256()
-    for path in sorted(Path(ontodetect.synth.__file__).parent.glob("*.py")):
+    for path in files:
         h.update(path.name.encode() + b"\0" + path.read_bytes())
     return h.hexdigest()[:16]
+
+
+def _catalogues(source: RoomSource) -> list[list[Any]]:
+    """Name, size and modification time of every furniture catalogue the furnished rooms read."""
+    if source.name != "furnished":
+        return []
+    try:
+        from ontodetect.synth.sh3d import default_catalog_dir
+
+        folder = default_catalog_dir()
+    except (ImportError, OntoDetectError):
+        return []  # furnished_scene will say what is missing when it runs
+    return [
+        [p.name, p.stat().st_size, int(p.stat().st_mtime)] for p in sorted(folder.glob("*.sh3f"))
+    ]
 
 
 def cache_key(source: RoomSource, scans: Sequence[SimScan]) -> dict[str, Any]:
@@ -223,6 +241,7 @@ def cache_key(source: RoomSource, scans: Sequence[SimScan]) -> dict[str, Any]:
         "points": POINTS,
         "ontodetect": __version__,
         "synth_sources": _source_digest(),
+        "catalogues": _catalogues(source),
     }
 
 
