@@ -325,6 +325,7 @@ def _class_figures(ev: Evaluation) -> dict[str, dict[str, Any]]:
 
 
 def dataset_figures(ev: DatasetEvaluation) -> dict[str, dict[str, dict[str, Any]]]:
+    """Threshold -> class (and overall) -> gt, det, tp, precision, recall of an evaluation."""
     return {key: _class_figures(ev.evaluations[key]) for key in THRESHOLDS}
 
 
@@ -491,6 +492,7 @@ def _pr(fig: Mapping[str, Any]) -> str:
 
 
 def class_table(title: str, figures: Mapping[str, Mapping[str, Any]]) -> Table:
+    """Per-class counts, precision and recall at both thresholds (from :func:`per_class`)."""
     t = Table(title=title, title_justify="left")
     t.add_column("class")
     for col in ("GT", "det @.25", "TP @.25", "P / R @.25", "det @.5", "TP @.5", "P / R @.5"):
@@ -511,7 +513,10 @@ def class_table(title: str, figures: Mapping[str, Mapping[str, Any]]) -> Table:
     return t
 
 
-def group_table(title: str, label: str, groups: Mapping[str, Any], counts: Mapping[str, int]):
+def group_table(
+    title: str, label: str, groups: Mapping[str, Any], counts: Mapping[str, int]
+) -> Table:
+    """One row per group of scans (from :func:`grouped`): ground truth and P / R per class."""
     t = Table(title=title, title_justify="left")
     t.add_column(label)
     t.add_column("scans", justify="right")
@@ -529,6 +534,7 @@ def group_table(title: str, label: str, groups: Mapping[str, Any], counts: Mappi
 
 
 def family_table(families: Mapping[str, Any], family_class: Mapping[str, str]) -> Table:
+    """Recall per furniture family (kind) at both thresholds, grouped by class."""
     t = Table(title="Simulated: recall per furniture family", title_justify="left")
     for col in ("class", "family", "GT", "found @.25", "recall @.25", "found @.5", "recall @.5"):
         t.add_column(col, justify="left" if col in ("class", "family") else "right")
@@ -548,6 +554,7 @@ def family_table(families: Mapping[str, Any], family_class: Mapping[str, str]) -
 
 
 def false_table(title: str, summary: Mapping[str, Any]) -> Table:
+    """False detections by what they really are (from :func:`false_summary`)."""
     t = Table(title=title, title_justify="left")
     t.add_column("really is")
     for c in CLASSES:
@@ -571,6 +578,7 @@ def false_table(title: str, summary: Mapping[str, Any]) -> Table:
 
 
 def stability_table(title: str, res: Mapping[str, Any]) -> Table:
+    """Found / reference detections per change and scan, with the mean and the worst."""
     t = Table(title=title, title_justify="left")
     t.add_column("transform")
     for s in res["scans"]:
@@ -594,11 +602,13 @@ def stability_table(title: str, res: Mapping[str, Any]) -> Table:
 
 # -- the run -------------------------------------------------------------------------------
 def _real_scenes(path: Path, quick: bool) -> list[SceneSource]:
+    """The labelled real scans of ``path`` (the first three with ``quick``)."""
     scenes = discover_scenes(path, "scannet-votenet")
     return scenes[:3] if quick else scenes
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Parse the options, check ``--real`` (one line and status 2 when it is bad), run."""
     ap = argparse.ArgumentParser(
         prog="python -m benchmarks generalization", description=__doc__.splitlines()[0]
     )
@@ -655,7 +665,10 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
         "seed": args.seed,
         "scene_source": dataclasses.asdict(source),
     }
-    console.print(f"simulated rooms: [bold]{source.name}[/] ({source.note})")
+    console.print(
+        f"simulated rooms: [bold]{source.name}[/], {len(source.room_types)} room types"
+        + (" (Sweet Home 3D catalogue furniture)" if source.name == "furnished" else "")
+    )
     with use_reporter(reporter):
         # (a) real development scans
         t0 = time.perf_counter()
