@@ -3,6 +3,8 @@
 - :mod:`~ontodetect.synth.scene`: the :class:`Scene` / :class:`SceneObject` data model.
 - :mod:`~ontodetect.synth.rooms`: :func:`build_room` and :data:`ROOM_TYPES`.
 - :mod:`~ontodetect.synth.sensors`: RGB-D camera, laser scanner, monocular SLAM.
+- :mod:`~ontodetect.synth.artefacts`: artefacts of real scans (ScanNet-like sampling, a
+  drifted second floor layer, holes, a tilt) applied to a scanned cloud.
 - :mod:`~ontodetect.synth.dataset`: :func:`synthesize`, :func:`write_synth`,
   :func:`load_synth`, :func:`synthesize_many`.
 - :mod:`~ontodetect.synth.sh3d`: Sweet Home 3D furniture catalogues (:func:`read_catalog`,

@@ -1,0 +1,318 @@
+"""The reusable parts of the generalization benchmark, small enough to test on hand-made data.
+
+- :func:`reappearance`: how many reference detections come back after the input changed;
+- :data:`STABILITY_TRANSFORMS` / :func:`stability_transforms`: the changes of input a
+  detector should not notice (turns, a large offset, rounding, jitter, a shuffle, a subsample);
+- :func:`false_detection_causes`: what a false detection really is (the ground-truth object
+  holding most of its points, or nothing);
+- :func:`recall_by_group`: recall of the ground-truth objects per group (furniture family);
+- :func:`instance_names`: instance id -> (class, kind) from per-point labels.
+
+Everything here takes detections and ground truth as :class:`ontodetect.evaluation.Instance`
+(point indices are rows of the scan's file) and plain arrays; nothing reads files.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ontodetect.cloud import PointCloud, sensor_position
+from ontodetect.evaluation import Instance, match_instances, turn_cloud
+
+__all__ = [
+    "JITTER_SIGMA",
+    "NOTHING",
+    "OFFSET",
+    "ROUNDING",
+    "STABILITY_IOU",
+    "STABILITY_TURNS",
+    "SUBSAMPLE_SHARE",
+    "false_detection_causes",
+    "instance_names",
+    "reappearance",
+    "recall_by_group",
+    "rows_to_values",
+    "stability_transforms",
+]
+
+#: A reference detection reappears when a detection of the same label overlaps it this much.
+STABILITY_IOU = 0.5
+#: Turns about the vertical (degrees): the quarter turns a voxel grid should not notice, and
+#: angles in between that meet other voxel boundaries.
+STABILITY_TURNS = (90.0, 180.0, 270.0, 15.0, 30.0, 45.0, 60.0)
+#: A large horizontal offset (m), as a scan georeferenced in UTM coordinates carries.
+OFFSET = (4.0e5, 4.0e5, 0.0)
+#: Rounding of the coordinates (m): 1 mm, as many exchange formats store them.
+ROUNDING = 1e-3
+#: Std of a Gaussian jitter of every coordinate (m): 0.5 mm, below any sensor's noise.
+JITTER_SIGMA = 5e-4
+#: Share of the points kept by the subsample.
+SUBSAMPLE_SHARE = 0.8
+#: What a false detection is when most of its points belong to no labelled object.
+NOTHING = "nothing"
+
+
+# -- stability -----------------------------------------------------------------------------
+def reappearance(
+    reference: Sequence[Instance],
+    other: Sequence[Instance],
+    *,
+    iou_threshold: float = STABILITY_IOU,
+    kept: ArrayLike | None = None,
+) -> tuple[int, int]:
+    """How many reference detections reappear among ``other`` detections.
+
+    A reference detection reappears when a detection of the same label overlaps it with
+    point IoU >= ``iou_threshold``; pairs are made one to one, greedily by descending score
+    of ``other`` (:func:`ontodetect.evaluation.match_instances`), so one detection cannot
+    stand for two.
+
+    Parameters
+    ----------
+    reference, other : sequences of Instance
+        Detections on the scan as is and on a changed copy; points are rows of the
+        original scan (a subsample keeps its points' original rows).
+    iou_threshold : float
+    kept : (k,) int, optional
+        Rows of the original scan present in the changed copy (a subsample): reference
+        detections are cut to these rows first, so that a detection found again on every
+        point still there counts, whatever share of its points the subsample dropped.
+
+    Returns
+    -------
+    reappeared, total : int
+        ``total`` is ``len(reference)``.
+
+    Examples
+    --------
+    >>> ref = [Instance.make(1, "chair", range(10)), Instance.make(2, "table", range(20, 40))]
+    >>> new = [Instance.make(1, "chair", range(2, 12)), Instance.make(2, "sofa", range(20, 40))]
+    >>> reappearance(ref, new)  # the chair: IoU 8/12; the table came back as a sofa
+    (1, 2)
+    """
+    refs = list(reference)
+    if kept is not None:
+        rows = np.unique(np.asarray(kept, dtype=np.int64))
+        refs = [
+            Instance.make(r.id, r.label, np.intersect1d(r.points, rows), r.score, r.center)
+            for r in refs
+        ]
+    if not refs:
+        return 0, 0
+    m = match_instances(list(other), refs, iou_threshold=iou_threshold)
+    return int(np.count_nonzero(m.gt_match >= 0)), len(refs)
+
+
+def _turn(degrees: float) -> Callable[[PointCloud, np.random.Generator], PointCloud]:
+    def fn(cloud: PointCloud, rng: np.random.Generator) -> PointCloud:
+        return turn_cloud(cloud, degrees)
+
+    return fn
+
+
+def _offset(cloud: PointCloud, rng: np.random.Generator) -> PointCloud:
+    shift = np.asarray(OFFSET)
+    out = cloud.replace(xyz=cloud.xyz + shift)
+    eye = sensor_position(cloud)
+    return out if eye is None else out.with_meta(sensor_position=(eye + shift).tolist())
+
+
+def _round(cloud: PointCloud, rng: np.random.Generator) -> PointCloud:
+    return cloud.replace(xyz=np.round(cloud.xyz / ROUNDING) * ROUNDING)
+
+
+def _jitter(cloud: PointCloud, rng: np.random.Generator) -> PointCloud:
+    return cloud.replace(xyz=cloud.xyz + rng.normal(0.0, JITTER_SIGMA, cloud.xyz.shape))
+
+
+def _shuffle(cloud: PointCloud, rng: np.random.Generator) -> PointCloud:
+    return cloud.select(rng.permutation(len(cloud)))
+
+
+def _subsample(cloud: PointCloud, rng: np.random.Generator) -> PointCloud:
+    keep = rng.choice(len(cloud), round(SUBSAMPLE_SHARE * len(cloud)), replace=False)
+    return cloud.select(np.sort(keep))
+
+
+def stability_transforms(
+    turns: Sequence[float] = STABILITY_TURNS,
+) -> dict[str, Callable[[PointCloud, np.random.Generator], PointCloud]]:
+    """Name -> ``fn(cloud, rng)`` giving a changed copy of a scan that keeps its rows.
+
+    Every copy keeps each point's row (``index``), so detections on it are compared with
+    those on the original over the original rows: turns about the vertical by ``turns``
+    degrees, an offset of :data:`OFFSET`, rounding to :data:`ROUNDING`, a Gaussian jitter
+    of :data:`JITTER_SIGMA`, the points shuffled, and :data:`SUBSAMPLE_SHARE` of them kept.
+
+    Examples
+    --------
+    >>> list(stability_transforms([90]))
+    ['turn 90°', 'offset 400000 m', 'round 1 mm', 'jitter 0.5 mm', 'shuffle', 'subsample 80 %']
+    """
+    out: dict[str, Callable[[PointCloud, np.random.Generator], PointCloud]] = {
+        f"turn {t:g}°": _turn(float(t)) for t in turns
+    }
+    out[f"offset {OFFSET[0]:g} m"] = _offset
+    out[f"round {ROUNDING * 1e3:g} mm"] = _round
+    out[f"jitter {JITTER_SIGMA * 1e3:g} mm"] = _jitter
+    out["shuffle"] = _shuffle
+    out[f"subsample {SUBSAMPLE_SHARE * 100:.0f} %"] = _subsample
+    return out
+
+
+#: Every transform of the benchmark, by name.
+STABILITY_TRANSFORMS = stability_transforms()
+
+
+# -- what the detections hit ---------------------------------------------------------------
+def rows_to_values(index: ArrayLike, values: ArrayLike, fill: int = 0) -> NDArray[np.int64]:
+    """A per-row array: ``values`` placed at the rows ``index`` names, ``fill`` elsewhere.
+
+    Examples
+    --------
+    >>> rows_to_values([2, 0], [7, 5]).tolist()
+    [5, 0, 7]
+    """
+    idx = np.asarray(index, dtype=np.int64)
+    out = np.full(int(idx.max()) + 1 if len(idx) else 0, fill, dtype=np.int64)
+    out[idx] = np.asarray(values, dtype=np.int64)
+    return out
+
+
+def instance_names(
+    instance: ArrayLike, class_id: ArrayLike, names: Mapping[int, str]
+) -> dict[int, tuple[str, str]]:
+    """Instance id -> (class name, kind) from per-point labels, for real scans.
+
+    The class is the most common class id among the instance's points (as
+    :func:`ontodetect.evaluation.instances_from_labels` decides); a real scan has no kind,
+    so the kind is the class name again. Unknown ids are named ``class <id>``.
+
+    Examples
+    --------
+    >>> instance_names([1, 1, 1, 2], [5, 5, 3, 1], {5: "chair", 1: "wall"})
+    {1: ('chair', 'chair'), 2: ('wall', 'wall')}
+    """
+    inst = np.asarray(instance, dtype=np.int64)
+    cls = np.asarray(class_id, dtype=np.int64)
+    out: dict[int, tuple[str, str]] = {}
+    pairs, counts = np.unique(np.stack([inst, cls], 1), axis=0, return_counts=True)
+    for iid in np.unique(inst):
+        if iid <= 0:
+            continue
+        mine = pairs[:, 0] == iid
+        cid = int(pairs[mine][np.argmax(counts[mine]), 1])
+        name = names.get(cid, f"class {cid}")
+        out[int(iid)] = (name, name)
+    return out
+
+
+def false_detection_causes(
+    preds: Sequence[Instance],
+    gts: Sequence[Instance],
+    instance_by_row: ArrayLike,
+    what: Mapping[int, tuple[str, str]],
+    *,
+    iou_threshold: float = 0.25,
+) -> list[dict[str, Any]]:
+    """What each false detection really is.
+
+    Detections are matched to the ground truth as the evaluation does (same class, point
+    IoU >= ``iou_threshold``, greedily by score); for every detection left unmatched, the
+    labelled object holding most of its points is looked up in ``what``. Points of no object
+    (instance 0, or rows beyond the labels) count for :data:`NOTHING`; ties go to the lower
+    instance id.
+
+    Parameters
+    ----------
+    preds, gts : sequences of Instance
+        Detections and the evaluated ground-truth objects (rows of the scan).
+    instance_by_row : (n,) int
+        Instance id of every row of the scan, 0 for none.
+    what : mapping of int to (str, str)
+        Instance id -> (class, kind) of every labelled object (structure too: wall, floor).
+
+    Returns
+    -------
+    list of dict
+        Per false detection, in the order of ``preds``: ``id``, ``label`` (what it was
+        detected as), ``is`` (class of the object holding most of its points, or
+        ``nothing``), ``kind``, ``instance`` (0 for nothing) and ``share`` (of its points
+        on that object).
+
+    Examples
+    --------
+    >>> inst = np.array([0, 0, 1, 1, 1, 2, 2, 2, 2, 2])
+    >>> gts = [Instance.make(2, "chair", [5, 6, 7, 8, 9])]
+    >>> dets = [Instance.make(1, "chair", [5, 6, 7, 8], 0.9),
+    ...         Instance.make(2, "chair", [0, 1, 2, 3, 4], 0.8)]
+    >>> [(f["id"], f["is"], f["share"]) for f in false_detection_causes(
+    ...     dets, gts, inst, {1: ("cabinet", "nightstand"), 2: ("chair", "chair-office")})]
+    [(2, 'cabinet', 0.6)]
+    """
+    owners = np.asarray(instance_by_row, dtype=np.int64)
+    preds = list(preds)
+    m = match_instances(preds, list(gts), iou_threshold=iou_threshold)
+    out = []
+    for p, k in zip(preds, m.pred_match):
+        if k >= 0:
+            continue
+        pts = p.points
+        ids = np.where(pts < len(owners), owners[np.minimum(pts, max(len(owners) - 1, 0))], 0)
+        if not len(ids):
+            values, counts = np.array([0]), np.array([0])
+        else:
+            values, counts = np.unique(ids, return_counts=True)
+        best = int(values[np.argmax(counts)])  # unique sorts: ties go to the lower id
+        cls, kind = (NOTHING, NOTHING) if best <= 0 else what.get(best, (NOTHING, NOTHING))
+        share = float(counts.max()) / len(pts) if len(pts) else 0.0
+        out.append(
+            {
+                "id": p.id,
+                "label": p.label,
+                "is": cls,
+                "kind": kind,
+                "instance": best if cls != NOTHING else 0,
+                "share": round(share, 4),
+            }
+        )
+    return out
+
+
+def recall_by_group(
+    preds: Sequence[Instance],
+    gts: Sequence[Instance],
+    group_of: Mapping[int, str],
+    *,
+    iou_threshold: float = 0.25,
+) -> dict[str, list[int]]:
+    """Found and total ground-truth objects per group (a furniture family, a kind).
+
+    Objects are matched as the evaluation matches them (same class, point IoU >=
+    ``iou_threshold``, greedily by score); an object whose id ``group_of`` does not
+    know goes to the group named by its class.
+
+    Returns
+    -------
+    dict of str to [found, total]
+        In order of first appearance among ``gts``.
+
+    Examples
+    --------
+    >>> gts = [Instance.make(1, "chair", range(10)), Instance.make(2, "chair", range(10, 20))]
+    >>> dets = [Instance.make(1, "chair", range(10), 0.9)]
+    >>> recall_by_group(dets, gts, {1: "chair-office", 2: "chair-armchair"})
+    {'chair-office': [1, 1], 'chair-armchair': [0, 1]}
+    """
+    gts = list(gts)
+    m = match_instances(list(preds), gts, iou_threshold=iou_threshold)
+    out: dict[str, list[int]] = {}
+    for g, k in zip(gts, m.gt_match):
+        tally = out.setdefault(group_of.get(g.id, g.label), [0, 0])
+        tally[0] += int(k >= 0)
+        tally[1] += 1
+    return out

@@ -1,0 +1,233 @@
+"""The generalization benchmark's pieces, on tiny hand-made data with known answers."""
+
+from __future__ import annotations
+
+import json
+import sys
+
+import numpy as np
+import pytest
+from benchmarks import _generalization as G
+from benchmarks import bench_generalization as B
+
+from ontodetect import point_cloud
+from ontodetect.evaluation import Instance
+from ontodetect.synth import load_synth
+
+
+def inst(id, label, rows, score=1.0):
+    return Instance.make(id, label, rows, score)
+
+
+# -- stability -----------------------------------------------------------------------------
+def test_reappearance_counts_same_label_overlaps_one_to_one():
+    reference = [
+        inst(1, "chair", range(0, 10), 0.9),  # comes back shifted by 2: IoU 8/12
+        inst(2, "chair", range(10, 20), 0.8),  # comes back shifted by 5: IoU 5/15 < 0.5
+        inst(3, "table", range(20, 40), 0.7),  # comes back as a sofa: not the same label
+        inst(4, "sofa", range(40, 60), 0.6),  # exactly the same
+        inst(5, "sofa", range(40, 60), 0.5),  # a duplicate: its twin is taken already
+    ]
+    other = [
+        inst(1, "chair", range(2, 12), 0.9),
+        inst(2, "chair", range(15, 25), 0.8),
+        inst(3, "sofa", range(20, 40), 0.7),
+        inst(4, "sofa", range(40, 60), 0.6),
+    ]
+    assert G.reappearance(reference, other) == (2, 5)
+    assert G.reappearance(reference, other, iou_threshold=0.3) == (3, 5)
+    assert G.reappearance([], other) == (0, 0)
+    assert G.reappearance(reference, []) == (0, 5)
+
+
+def test_reappearance_after_a_subsample_compares_on_the_rows_kept():
+    reference = [inst(1, "chair", range(0, 10))]
+    kept = np.arange(0, 100, 3)  # every third row survived
+    other = [inst(1, "chair", range(0, 10, 3))]  # every kept row of the chair found again
+    assert G.reappearance(reference, other) == (0, 1)  # IoU 4/10 on all rows
+    assert G.reappearance(reference, other, kept=kept) == (1, 1)  # IoU 1 on the kept rows
+
+
+def test_stability_transforms_keep_rows_and_do_what_they_say(rng):
+    xyz = rng.uniform(0, 3, size=(1000, 3))
+    cloud = point_cloud(xyz, fields={"label": np.arange(1000)})
+    fns = G.stability_transforms([90, 30])
+    assert list(fns) == [
+        "turn 90°",
+        "turn 30°",
+        "offset 400000 m",
+        "round 1 mm",
+        "jitter 0.5 mm",
+        "shuffle",
+        "subsample 80 %",
+    ]
+    out = {name: fn(cloud, np.random.default_rng(0)) for name, fn in fns.items()}
+    for name, c in out.items():
+        np.testing.assert_array_equal(c.fields["label"], c.index, err_msg=name)
+    np.testing.assert_allclose(out["turn 90°"].xyz, np.c_[-xyz[:, 1], xyz[:, 0], xyz[:, 2]])
+    np.testing.assert_allclose(out["offset 400000 m"].xyz - xyz, [[4e5, 4e5, 0]] * 1000)
+    assert np.abs(out["round 1 mm"].xyz - xyz).max() <= 5e-4 + 1e-12
+    np.testing.assert_allclose(out["round 1 mm"].xyz * 1000, np.round(xyz * 1000), atol=1e-9)
+    assert np.std(out["jitter 0.5 mm"].xyz - xyz) == pytest.approx(5e-4, rel=0.05)
+    shuffled = out["shuffle"]
+    assert sorted(shuffled.index.tolist()) == list(range(1000))
+    np.testing.assert_array_equal(shuffled.xyz, xyz[shuffled.index])
+    sub = out["subsample 80 %"]
+    assert len(sub) == 800 and len(np.unique(sub.index)) == 800
+    np.testing.assert_array_equal(sub.xyz, xyz[sub.index])
+    assert np.all(xyz == cloud.xyz)  # the input is not modified
+
+
+# -- false detections and families ---------------------------------------------------------
+def tiny_labelled_scan():
+    """Rows 0-9 floor (instance 1), 10-19 wall (2), 20-29 chair (3), 30-39 sink (4),
+    40-44 nothing (0)."""
+    instance = np.r_[[1] * 10, [2] * 10, [3] * 10, [4] * 10, [0] * 5]
+    what = {
+        1: ("floor", "floor"),
+        2: ("wall", "wall"),
+        3: ("chair", "chair-office"),
+        4: ("sink", "sink"),
+    }
+    gts = [inst(3, "chair", range(20, 30))]
+    return instance, what, gts
+
+
+def test_false_detections_are_named_by_the_object_holding_most_of_their_points():
+    instance, what, gts = tiny_labelled_scan()
+    dets = [
+        inst(1, "chair", range(20, 30), 0.9),  # the chair: a true positive
+        inst(2, "chair", [*range(30, 38), 28, 29], 0.8),  # 8 sink points, 2 chair points
+        inst(3, "table", range(0, 10), 0.7),  # the floor
+        inst(4, "sofa", [40, 41, 42, 43, 12], 0.6),  # 4 of nothing, 1 of wall
+        inst(5, "chair", range(21, 29), 0.5),  # the chair again: a duplicate
+        inst(6, "table", [10, 11, 30, 31], 0.4),  # a tie: the lower id (the wall) wins
+    ]
+    causes = G.false_detection_causes(dets, gts, instance, what)
+    got = [(f["id"], f["label"], f["is"], f["kind"], f["instance"], f["share"]) for f in causes]
+    assert got == [
+        (2, "chair", "sink", "sink", 4, 0.8),
+        (3, "table", "floor", "floor", 1, 1.0),
+        (4, "sofa", "nothing", "nothing", 0, 0.8),
+        (5, "chair", "chair", "chair-office", 3, 1.0),
+        (6, "table", "wall", "wall", 2, 0.5),
+    ]
+
+
+def test_false_detections_at_a_stricter_overlap_include_loose_matches():
+    instance, what, gts = tiny_labelled_scan()
+    dets = [inst(1, "chair", range(20, 24), 0.9)]  # 4 of the chair's 10 points: IoU 0.4
+    assert G.false_detection_causes(dets, gts, instance, what, iou_threshold=0.25) == []
+    (f,) = G.false_detection_causes(dets, gts, instance, what, iou_threshold=0.5)
+    assert (f["is"], f["kind"], f["share"]) == ("chair", "chair-office", 1.0)
+
+
+def test_rows_beyond_the_labels_count_as_nothing():
+    instance, what, gts = tiny_labelled_scan()
+    (f,) = G.false_detection_causes([inst(1, "table", [100, 101, 0])], gts, instance, what)
+    assert (f["is"], f["instance"]) == ("nothing", 0)
+
+
+def test_recall_by_group_separates_armchairs_from_office_chairs():
+    gts = [
+        inst(1, "chair", range(0, 10)),
+        inst(2, "chair", range(10, 20)),
+        inst(3, "chair", range(20, 30)),
+        inst(4, "table", range(30, 50)),
+    ]
+    kinds = {1: "chair-office", 2: "chair-office", 3: "chair-armchair"}
+    dets = [
+        inst(1, "chair", range(0, 10), 0.9),
+        inst(2, "sofa", range(20, 30), 0.8),  # the armchair taken for a sofa
+        inst(3, "chair", range(10, 14), 0.7),  # a piece of the second office chair
+    ]
+    assert G.recall_by_group(dets, gts, kinds) == {
+        "chair-office": [2, 2],
+        "chair-armchair": [0, 1],
+        "table": [0, 1],  # no kind known: grouped under its class
+    }
+    assert G.recall_by_group(dets, gts, kinds, iou_threshold=0.5)["chair-office"] == [1, 2]
+
+
+def test_instance_names_take_the_majority_class():
+    names = G.instance_names([0, 5, 5, 5, 7], [1, 5, 5, 3, 99], {5: "chair", 3: "cabinet"})
+    assert names == {5: ("chair", "chair"), 7: ("class 99", "class 99")}
+
+
+# -- the simulated set ---------------------------------------------------------------------
+def test_simulated_set_is_fixed_and_large_enough():
+    full = B.simulated_set(B.PARAMETRIC_ROOMS)
+    rooms = {(s.room, s.seed) for s in full}
+    fused = [s for s in full if s.variant == "fused"]
+    assert len(fused) == len(rooms) >= 60
+    assert {s.variant for s in full} == set(B.VARIANTS)
+    assert len({s.name for s in full}) == len(full)
+    assert B.simulated_set(B.PARAMETRIC_ROOMS) == full
+    nine = B.simulated_set([f"type{k}" for k in range(9)])
+    assert sum(s.variant == "fused" for s in nine) == 63  # 9 room types x 7 seeds
+    quick = B.simulated_set(B.PARAMETRIC_ROOMS, quick=True)
+    assert len(quick) == 8 and {s.variant for s in quick} == set(B.VARIANTS)
+
+
+def test_the_cache_key_changes_with_the_scans():
+    source = B.RoomSource("parametric", B.PARAMETRIC_ROOMS, "")
+    scans = B.simulated_set(B.PARAMETRIC_ROOMS, quick=True)
+    a = B.cache_key(source, scans)
+    assert a == B.cache_key(source, scans)
+    assert a != B.cache_key(source, scans[:-1])
+    assert a["ontodetect"] and len(a["synth_sources"]) == 16
+
+
+def test_without_the_furnished_rooms_the_parametric_ones_are_used_with_a_warning(monkeypatch):
+    monkeypatch.setitem(sys.modules, "ontodetect.synth.furnished", None)  # import fails
+    source = B.room_source()
+    assert source.name == "parametric" and source.room_types == B.PARAMETRIC_ROOMS
+    assert "not available" in source.note
+
+
+def test_generate_scan_writes_a_scannet_like_scan_with_its_artefacts(tmp_path, monkeypatch):
+    # A coarse scan keeps the test fast; the benchmark's own settings only make it denser.
+    monkeypatch.setattr(B, "DENSE_SCAN", {"voxel": 0.05, "num_frames": 4, "stride": 16})
+    monkeypatch.setattr(B, "POINTS", 3000)
+    scan = B.SimScan("tiny", 0, "floor-layer")
+    summary = B.generate_scan(("parametric", scan, str(tmp_path / scan.name)))
+    cloud, objects, scene = load_synth(tmp_path / scan.name)
+    assert summary["points"] == len(cloud) == min(B.POINTS, scene["num_points"])
+    steps = [a["name"] for a in scene["sensor"]["parameters"]["artefacts"]]
+    assert steps == ["duplicate_floor_layer", "scannet_sampling"]
+    ids = {o["id"]: o for o in objects}
+    for iid, cid in zip(cloud.fields["instance"][:500], cloud.fields["class_id"][:500]):
+        if iid > 0:
+            assert ids[int(iid)]["class_id"] == cid  # labels stayed with their points
+    again = tmp_path / "again"
+    B.generate_scan(("parametric", scan, str(again)))
+    assert (again / "cloud.ply").read_bytes() == (tmp_path / scan.name / "cloud.ply").read_bytes()
+
+
+# -- the command ---------------------------------------------------------------------------
+def test_a_bad_real_path_is_one_line_and_exit_2(tmp_path, capsys):
+    missing = tmp_path / "nowhere"
+    assert B.main(["--real", str(missing), "--out", str(tmp_path / "out")]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and str(missing) in lines[0]
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert B.main(["--real", str(empty), "--out", str(tmp_path / "out")]) == 2
+    assert str(empty) in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+def test_figures_are_json_ready():
+    a = inst(1, "chair", range(10))
+    from ontodetect.evaluation import SceneResult
+
+    figs = B.per_class([SceneResult("s", [a], [a])])
+    json.dumps(figs)
+    assert figs["iou@0.25"]["chair"] == {
+        "gt": 1,
+        "det": 1,
+        "tp": 1,
+        "precision": 1.0,
+        "recall": 1.0,
+    }
+    assert figs["iou@0.5"]["overall"]["tp"] == 1
