@@ -6,7 +6,7 @@ OUT ?= demo-output
 # The tool that writes the lock, pinned like everything else.
 UV_VERSION := 0.13.9
 
-.PHONY: setup demo test lint format bench lock clean
+.PHONY: setup demo test lint format bench generalization lock clean
 
 setup:
 	@bash scripts/bootstrap.sh
@@ -29,6 +29,12 @@ format: setup
 
 bench: setup
 	$(PY) -m benchmarks all
+
+# The generalization benchmark (docs/benchmarks.md): make generalization REAL=path/to/scannet-dev
+generalization:
+	@test -n "$(REAL)" || { echo "make generalization REAL=DIR: DIR holds the real labelled scans"; exit 2; }
+	@bash scripts/bootstrap.sh --with-furniture
+	$(PY) -m benchmarks generalization --real "$(REAL)" --jobs 2
 
 # Refresh requirements.lock from pyproject.toml's ranges (the newest versions they admit, for
 # every platform and Python the package supports), then reinstall from it.

@@ -26,6 +26,23 @@ if [ "$(uname -s)" = "Linux" ] && ! ldconfig -p 2>/dev/null | grep -q 'libusb-1\
     fi
 fi
 
+# 1b. With --with-furniture (the generalization benchmark): Debian's Sweet Home 3D furniture
+#     catalogues, which furnish its simulated rooms. Unit tests never need them.
+if [ "${1:-}" = "--with-furniture" ] && [ ! -d /usr/share/sweethome3d/furniture ] \
+        && [ -z "${ONTODETECT_SH3D_DIR:-}" ]; then
+    if [ "$(id -u)" = "0" ] && command -v apt-get >/dev/null 2>&1; then
+        say "installing sweethome3d-furniture with apt-get (the benchmark's furniture models)"
+        export DEBIAN_FRONTEND=noninteractive
+        apt-get update -qq >/dev/null
+        apt-get install -y -qq sweethome3d-furniture >/dev/null
+    else
+        say "The generalization benchmark furnishes its rooms with Sweet Home 3D's catalogues."
+        say "Install them first: sudo apt-get install sweethome3d-furniture (Debian/Ubuntu),"
+        say "or point ONTODETECT_SH3D_DIR at a folder of .sh3f files."
+        exit 1
+    fi
+fi
+
 # 2. The virtual environment.
 if [ ! -x "$VENV/bin/python" ]; then
     say "creating virtual environment in $VENV"
