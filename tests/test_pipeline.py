@@ -98,8 +98,8 @@ def test_shelter_is_the_highest_top_beside_a_cluster():
 def test_open_below_sees_the_floor_under_a_table_and_not_under_a_box(rng):
     """The floor shows under a table on legs; under a closed box (a cabinet) it was never
     seen. Only horizontal planes at least OPEN_BELOW_HEIGHT high are measured."""
-    from ontodetect.pipeline import OPEN_BELOW_HEIGHT, describe_clusters, open_below
     from ontodetect.segment import segment
+    from ontodetect.segment._measure import OPEN_BELOW_HEIGHT, describe_clusters, open_below
     from test_segmentation import rect, slab, table
 
     floor = rect(rng, (0, 0, 0), (5, 0, 0), (0, 3, 0), 0.03)
@@ -244,7 +244,7 @@ def test_vote_workers_fork_only_when_safe():
     import threading
 
     from ontodetect._parallel import cpu_count
-    from ontodetect.pipeline import _vote_workers
+    from ontodetect.pipeline._detect import _vote_workers
 
     assert _vote_workers(1, 2) == 0 and _vote_workers(4, 0) == 0
     assert _vote_workers(4, 2) == 2 and _vote_workers(2, 4) == 2

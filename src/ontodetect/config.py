@@ -41,6 +41,8 @@ from typing import Any, ClassVar
 import yaml
 
 from .errors import InvalidParameterError, OntoDetectError, ReadError
+from .io._atomic import atomic_write_text
+from .io._textfile import read_text
 
 __all__ = [
     "ClusterConfig",
@@ -592,8 +594,6 @@ class Config:
         InvalidParameterError
             An unknown key or a bad value; the message names the key and the file.
         """
-        from .io._textfile import read_text
-
         return cls.from_yaml_text(read_text(path, "configuration file"), source=str(Path(path)))
 
     @classmethod
@@ -613,8 +613,6 @@ class Config:
         """YAML text of the whole configuration; written atomically to ``path`` if given."""
         text = yaml.dump(self.to_dict(), Dumper=_Dumper, sort_keys=False)
         if path is not None:
-            from .io import atomic_write_text
-
             atomic_write_text(Path(path), text)
         return text
 

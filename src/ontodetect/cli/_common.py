@@ -3,14 +3,16 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import yaml
 
 from ..config import Config
 from ..errors import InvalidParameterError, ReadError
 from ..io._textfile import read_text
-from ..ontology import Ontology, load_ontology
+
+if TYPE_CHECKING:
+    from ..ontology import Ontology
 
 
 def load_config(config: Path | None, overrides: list[str]) -> Config:
@@ -21,6 +23,8 @@ def load_config(config: Path | None, overrides: list[str]) -> Config:
 
 def load_ontology_option(files: list[Path], only: bool) -> Ontology:
     """The built-in ontology with ``--ontology`` files merged in (or only them)."""
+    from ..ontology import load_ontology  # lazy: CLI start-up
+
     if only and not files:
         raise InvalidParameterError(
             "--ontology-only", "used with at least one --ontology FILE", "no file"

@@ -8,18 +8,17 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
-from ..evaluation import FitSettings, calibrate_dataset
-from ..evaluation._calibrate import (
+from ..io import atomic_write_text
+from ..io._layouts import DATASET_FORMATS
+from . import app
+from ._console import console, err_console, reporting, state
+from ._defaults import (
     MIN_GAIN_ROOMS,
     MIN_ROOMS,
     ONE_SIDED_QUANTILE,
     PRIOR_SIGMA_SHARE,
     PRIOR_STRENGTH,
 )
-from ..evaluation._dataset import DATASET_FORMATS
-from ..io import atomic_write_text
-from . import app
-from ._console import console, err_console, reporting, state
 from .evaluate import detect_options
 
 
@@ -103,6 +102,8 @@ def calibrate(
     ),
 ) -> None:
     """Estimate each constraint's mean and sigma from labelled objects; check on held-out rooms."""
+    from ..calibrate import FitSettings, calibrate_dataset  # lazy: CLI start-up
+
     opts = detect_options(
         config, set_, None, False, room, None, None, up, scale, threshold, None, None, 0
     )

@@ -7,9 +7,7 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
-from ..evaluation import evaluate_dataset, write_report
-from ..evaluation._dataset import DATASET_FORMATS
-from ..evaluation._report import CRITERION_NAMES
+from ..io._layouts import DATASET_FORMATS
 from . import app
 from ._common import load_config, load_ontology_option, number_list, room_option
 from ._console import console, reporting, state
@@ -134,6 +132,9 @@ def eval_(
     ),
 ) -> None:
     """Evaluate detection on a labelled dataset: P, R, F1, AP per class, confusion, times."""
+    from ..evaluation import evaluate_dataset, write_report  # lazy: CLI start-up
+    from ..evaluation._report import CRITERION_NAMES  # lazy: CLI start-up
+
     opts = detect_options(
         config,
         set_,

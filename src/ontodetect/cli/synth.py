@@ -9,9 +9,9 @@ import typer
 import yaml
 
 from ..errors import InvalidParameterError
-from ..synth import SENSORS, room_types, sensor_options, synthesize, synthesize_many, write_synth
 from . import app
 from ._console import console, reporting
+from ._defaults import SENSORS
 
 _SENSOR_HELP = {
     "rgbd": "Kinect-like RGB-D camera walked around the room, frames fused (world frame)",
@@ -70,6 +70,15 @@ def synth(
 ) -> None:
     """Simulate scans of furnished rooms with per-point ground truth (cloud.ply, objects.json,
     scene.json, mesh.ply)."""
+    from ..synth import (  # lazy: CLI start-up
+        SENSORS,
+        room_types,
+        sensor_options,
+        synthesize,
+        synthesize_many,
+        write_synth,
+    )
+
     if list_:
         console.print("[bold]room types[/]: " + ", ".join(room_types()))
         console.print("[bold]sensors[/]:")

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import inspect
 import math
 import os
 import re
@@ -36,15 +37,25 @@ import numpy as np
 
 from .._parallel import cpu_count, pool_context
 from .._progress import progress
-from .._transforms import yaw_pose
 from ..cloud import PointCloud, sensor_position
+from ..config import Config
 from ..errors import (
     CorruptFileError,
     InvalidParameterError,
     OntoDetectError,
     ReadError,
     UnsupportedFormatError,
+    WriteError,
 )
+from ..geometry import yaw_pose
+from ..io import read_cloud
+from ..io._detections import read_detections, write_detections
+from ..io._labels import NYU40_NAMES
+from ..io._layouts import DATASET_FORMATS
+from ..ontology import builtin_ontology
+from ..pipeline import detect
+from ..synth import load_synth
+from ..synth.scene import CLASS_IDS
 from ._match import Instance, instances_from_labels
 from ._metrics import Evaluation, SceneResult, evaluate_scenes
 
@@ -69,8 +80,6 @@ __all__ = [
     "variant_name",
 ]
 
-#: Dataset layouts :func:`discover_scenes` knows ("auto" guesses per folder).
-DATASET_FORMATS = ("auto", "ontodetect", "scannet", "scannet-votenet", "s3dis")
 #: Other names accepted for a layout.
 FORMAT_ALIASES = {"synth": "ontodetect", "votenet": "scannet-votenet"}
 #: The three ways a detection is scored: key -> (criterion, IoU threshold). DESIGN.md:
@@ -249,9 +258,6 @@ def discover_scenes(path: str | os.PathLike[str], format: str = "auto") -> list[
 # -- loading -------------------------------------------------------------------------------
 def _class_id_lists(ontology: Any, *, reported_only: bool, attr: str) -> dict[int, list[str]]:
     """Ground-truth class id -> every class (``attr`` of it) that matches it, in file order."""
-    from ..io._labels import NYU40_NAMES
-    from ..synth.scene import CLASS_IDS
-
     ids = {name: cid for name, cid in CLASS_IDS.items() if cid > 0}
     ids.update({name: cid for cid, name in NYU40_NAMES.items() if cid > 0})
     out: dict[int, list[str]] = {}
@@ -286,8 +292,6 @@ def evaluation_classes(ontology: Any = None) -> dict[int, str]:
     {5: 'chair', 6: 'sofa', 7: 'table', 14: 'table'}
     """
     if ontology is None:
-        from ..ontology import builtin_ontology
-
         ontology = builtin_ontology()
     return _class_ids(ontology, reported_only=True, attr="label")
 
@@ -308,12 +312,8 @@ class LoadedScene:
 
 def read_scene_cloud(source: SceneSource) -> PointCloud:
     """The scene's points with per-point ``instance`` and ``class_id`` fields."""
-    from ..io import read_cloud
-
     path = Path(source.path)
     if source.format == "ontodetect":
-        from ..synth import load_synth
-
         cloud, _, _ = load_synth(path)
     else:
         cloud = read_cloud(path, format=source.format)
@@ -387,8 +387,6 @@ def read_scene_detections(
     num_points : int, optional
         Rows of the scene's input file; a document written for another scan is refused.
     """
-    from ..io._detections import read_detections
-
     path = Path(detections_dir) / scene / "detections.json"
     doc = read_detections(path)
     if num_points is not None and doc["num_points"] != num_points:
@@ -479,10 +477,6 @@ class SceneOutcome:
 
 @functools.cache
 def _detect_keys() -> tuple[str, ...]:
-    import inspect
-
-    from ..pipeline import detect
-
     return tuple(p for p in inspect.signature(detect).parameters if p != "cloud")
 
 
@@ -549,8 +543,6 @@ def evaluate_scene(
             load = time.perf_counter() - t0
             seconds, timings = 0.0, {}
         else:
-            from ..pipeline import detect
-
             load = time.perf_counter() - t0
             t1 = time.perf_counter()
             result = detect(scene.cloud, **opts)
@@ -627,9 +619,6 @@ def _check_variants(name: str, values: Sequence[Any] | None, kind: type) -> list
 
 
 def _save_detections(result: Any, folder: Path) -> None:
-    from ..errors import WriteError
-    from ..io._detections import write_detections
-
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
@@ -813,8 +802,6 @@ def describe_options(
     out: dict[str, Any] = {}
     for key, value in options.items():
         if key == "config":
-            from ..config import Config
-
             default = Config().to_dict()
             changed = {
                 f"{sec}.{k}": _jsonable_option(v)

@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InvalidParameterError
+from ..geometry import point_overlap
 
 __all__ = [
     "DISTANCE_THRESHOLDS",
@@ -123,29 +124,9 @@ def instances_from_labels(
 def overlap_matrix(
     preds: Sequence[Instance], gts: Sequence[Instance]
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
-    """(p, g) IoU and intersection counts between every detection and ground-truth instance."""
-    iou = np.zeros((len(preds), len(gts)))
-    inter = np.zeros((len(preds), len(gts)), dtype=np.int64)
-    if not preds or not gts:
-        return iou, inter
-    all_gt = np.concatenate([g.points for g in gts])
-    owner = np.concatenate([np.full(len(g.points), k) for k, g in enumerate(gts)])
-    order = np.argsort(all_gt, kind="stable")
-    all_gt, owner = all_gt[order], owner[order]
-    gt_sizes = np.array([len(g.points) for g in gts])
-    for i, p in enumerate(preds):
-        lo = np.searchsorted(all_gt, p.points, "left")
-        hi = np.searchsorted(all_gt, p.points, "right")
-        hits = hi > lo
-        if not hits.any():
-            continue
-        # Ground-truth instances may share points only in malformed data; count each hit.
-        idx = np.concatenate([np.arange(a, b) for a, b in zip(lo[hits], hi[hits])])
-        counts = np.bincount(owner[idx], minlength=len(gts))
-        inter[i] = counts
-        union = len(p.points) + gt_sizes - counts
-        iou[i] = np.where(union > 0, counts / np.maximum(union, 1), 0.0)
-    return iou, inter
+    """(p, g) IoU and intersection counts between every detection and ground-truth instance
+    (:func:`ontodetect.geometry.point_overlap` of their points)."""
+    return point_overlap([p.points for p in preds], [g.points for g in gts])
 
 
 @dataclass(frozen=True)

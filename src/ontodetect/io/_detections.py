@@ -9,14 +9,12 @@ instead of a wrong score.
 from __future__ import annotations
 
 import json
-import math
 import os
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from ..errors import CorruptFileError
+from ..geometry import jsonable
 from ._atomic import atomic_write_text
 from ._textfile import read_text
 
@@ -25,23 +23,9 @@ __all__ = ["DETECTIONS_FORMAT", "read_detections", "validate_detections", "write
 DETECTIONS_FORMAT = "ontodetect.detections/1"
 
 
-def _jsonable(value: Any) -> Any:
-    if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return _jsonable(value.tolist())
-    if isinstance(value, np.generic):
-        return _jsonable(value.item())
-    if isinstance(value, float):
-        return value if math.isfinite(value) else None
-    return value
-
-
 def write_detections(path: str | os.PathLike[str], document: dict[str, Any]) -> Path:
     """Validate and write a detections document atomically (compact point lists, indented rest)."""
-    doc = _jsonable(document)
+    doc = jsonable(document)
     validate_detections(doc, str(path))
     # Index lists go on one line each: readable, and a tenth of the size of one number a line.
     marked = {

@@ -33,6 +33,7 @@ from numpy.typing import NDArray
 
 from ..cloud import PointCloud, point_cloud
 from ..errors import CorruptFileError, InvalidParameterError, ReadError
+from . import read_cloud  # the PLY reader goes through the registry
 from ._labels import UNANNOTATED, nyu40_name, read_scannet_label_map
 from ._text import _to_colors
 
@@ -188,8 +189,6 @@ def read_scannet(
     CorruptFileError
         A JSON file is damaged or its lengths disagree with the mesh.
     """
-    from . import read_cloud  # the PLY reader goes through the registry
-
     path = Path(path)
     mesh, scene = _scene_files(path)
     folder = mesh.parent

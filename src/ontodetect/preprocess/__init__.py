@@ -30,10 +30,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._progress import progress
-from .._transforms import yaw_pose
 from ..cloud import PointCloud, point_cloud
 from ..config import Config
 from ..errors import InvalidParameterError
+from ..geometry import yaw_pose
 from ..summary import estimate_spacing, guess_units
 from ._denoise import denoise, far_outlier_mask, radius_outlier_mask, statistical_outlier_mask
 from ._depth import smooth_depth

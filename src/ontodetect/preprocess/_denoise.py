@@ -14,6 +14,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
 from ..errors import InvalidParameterError
+from ..geometry import as_points
 from ._voxel import voxelize
 
 __all__ = [
@@ -30,13 +31,6 @@ DENOISE_METHODS = ("statistical", "radius", "both", "none")
 SOR_MEDIAN_FLOOR = 2.0
 #: Percentiles of the far-outlier box come from at most about this many points.
 PERCENTILE_SAMPLE = 200_000
-
-
-def _as_points(points: ArrayLike) -> NDArray[np.float64]:
-    pts = np.asarray(points, dtype=np.float64)
-    if pts.ndim != 2 or pts.shape[1] != 3:
-        raise InvalidParameterError("points", "an array of shape (n, 3)", f"shape {pts.shape}")
-    return pts
 
 
 def statistical_outlier_mask(
@@ -71,7 +65,7 @@ def statistical_outlier_mask(
     >>> bool(keep[-1]), int(keep.sum())
     (False, 100)
     """
-    pts = _as_points(points)
+    pts = as_points(points)
     if int(neighbors) < 1:
         raise InvalidParameterError("neighbors", "an int in the range [1, inf)", neighbors)
     if not std_ratio > 0:
@@ -96,7 +90,7 @@ def radius_outlier_mask(
     >>> radius_outlier_mask([[0, 0, 0], [0.01, 0, 0], [0, 0.01, 0], [1, 1, 1]], 0.05).tolist()
     [True, True, True, False]
     """
-    pts = _as_points(points)
+    pts = as_points(points)
     if not radius > 0:
         raise InvalidParameterError("radius", "a float in the range (0, inf)", radius)
     if len(pts) == 0:
@@ -122,7 +116,7 @@ def far_outlier_mask(
     >>> bool(far_outlier_mask(pts, 0.5, 1.0)[-1])
     False
     """
-    pts = _as_points(points)
+    pts = as_points(points)
     if not 0 <= percentile < 50:
         raise InvalidParameterError("percentile", "a float in the range [0, 50)", percentile)
     if len(pts) == 0:
@@ -177,7 +171,7 @@ def denoise(
     >>> bool(keep[-1]), int(keep[:-1].sum())
     (False, 5000)
     """
-    pts = _as_points(points)
+    pts = as_points(points)
     if method not in DENOISE_METHODS:
         raise InvalidParameterError(
             "method", "one of " + ", ".join(map(repr, DENOISE_METHODS)), method

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from ..geometry import box_corners
 from ..io._atomic import atomic_write
 
 __all__ = ["CLASS_COLORS", "BoxDrawing", "box_corners", "render_scene"]
@@ -58,24 +59,6 @@ class BoxDrawing:
     yaw: float
     label: str
     text: str = ""
-
-
-def box_corners(center: Sequence[float], size: Sequence[float], yaw: float) -> NDArray[np.float64]:
-    """(8, 3) corners of an upright box: bottom four counter-clockwise, then the top four.
-
-    Examples
-    --------
-    >>> box_corners([0, 0, 0.5], [2, 1, 1], 0.0)[0].tolist()
-    [-1.0, -0.5, 0.0]
-    """
-    c = np.asarray(center, dtype=np.float64)
-    lx, ly, lz = np.asarray(size, dtype=np.float64) / 2
-    local = np.array([[-lx, -ly], [lx, -ly], [lx, ly], [-lx, ly]])
-    cs, sn = np.cos(yaw), np.sin(yaw)
-    xy = local @ np.array([[cs, sn], [-sn, cs]]) + c[:2]
-    bottom = np.c_[xy, np.full(4, c[2] - lz)]
-    top = np.c_[xy, np.full(4, c[2] + lz)]
-    return np.vstack([bottom, top])
 
 
 def _subsample(n: int, limit: int, seed: int = 0) -> NDArray[np.intp]:
