@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from ._version import __version__
 from .cloud import DataWarning, PointCloud, point_cloud
+from .config import Config
 from .errors import (
     CorruptFileError,
     InvalidOntologyError,
@@ -32,6 +33,7 @@ from .errors import (
 from .io import read_cloud, write_cloud
 
 __all__ = [
+    "Config",
     "CorruptFileError",
     "DataWarning",
     "Detection",

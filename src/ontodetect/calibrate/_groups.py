@@ -11,10 +11,8 @@ import yaml
 
 from .._progress import progress
 from ..config import Config
-from ..evaluation._dataset import (
-    _natural_key,
-)
 from ..evaluation._match import Instance, match_instances
+from ..io._layouts import natural_key
 from ..labeling import label_clusters
 from ..ontology import class_priors, parse_ontology, score_cluster
 from ._gaussian import (
@@ -136,10 +134,7 @@ def _detection_params(ontology: Any, detect_options: Mapping[str, Any]) -> dict[
 
     opts = dict(detect_options)
     d = (opts.get("config") or Config()).detect
-    params = {
-        k: d.__getattribute__(k) if opts.get(k) is None else opts[k]
-        for k in ("threshold", "beta", "none_likelihood", "context")
-    }
+    params = {k: getattr(d, k) for k in ("threshold", "beta", "none_likelihood", "context")}
     params["priors"] = class_priors(ontology, opts.get("room"), opts.get("indoor"))
     return params
 
@@ -209,7 +204,7 @@ def select_groups(
     classes = [c.label for c in base.classes if c.detect]
     classes = list(dict.fromkeys(classes))
     params = _detection_params(base, detect_options or {})
-    rooms = sorted(room_values, key=_natural_key)
+    rooms = sorted(room_values, key=natural_key)
     folds = []
     for held in held_rooms:
         values: dict[ConstraintPath, list[float]] = {}
@@ -311,7 +306,7 @@ def validation_rooms(
     """
     if len(room_values) < 2:
         return []
-    return [r for r in sorted(room_values, key=_natural_key) if scenes.get(r)]
+    return [r for r in sorted(room_values, key=natural_key) if scenes.get(r)]
 
 
 # -- the whole procedure -------------------------------------------------------------------

@@ -11,15 +11,15 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from ..config import SHARE, check_param
 from ..errors import InvalidParameterError
 from ..evaluation._dataset import (
     DatasetEvaluation,
-    SceneSource,
     _check_detect_options,
-    discover_scenes,
     evaluate_dataset,
     map_scenes,
 )
+from ..io._layouts import SceneSource, discover_scenes
 from ..io._textfile import read_text
 from ..ontology import parse_ontology
 from ._gaussian import ConstraintFit, FitSettings, calibrate_ontology
@@ -179,8 +179,7 @@ def calibrate_dataset(
     opts = _check_detect_options(detect_options)
     if "ontology" in opts:
         raise InvalidParameterError("detect_options", "without 'ontology' (use base=)", "ontology")
-    if not 0.0 < min_iou <= 1.0:
-        raise InvalidParameterError("min_iou", "a number in (0, 1]", min_iou)
+    check_param("min_iou", SHARE, min_iou)
     text = _builtin_text() if base is None else read_text(base, "ontology file")
     source = "builtin:furniture.yaml" if base is None else str(base)
     base_onto = parse_ontology(text, source)

@@ -11,12 +11,12 @@ import numpy as np
 
 from ..errors import InvalidParameterError, OntoDetectError
 from ..evaluation._dataset import (
-    SceneSource,
     _class_id_lists,
     _class_ids,
     read_scene_cloud,
 )
 from ..evaluation._match import Instance, instances_from_labels, overlap_matrix
+from ..io._layouts import SceneSource
 from ..ontology import score_class
 from ..segment import segment
 from ..segment._measure import describe_clusters

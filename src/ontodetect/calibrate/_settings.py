@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 #: A ground-truth object calibrates only through a cluster with at least this point IoU
-#: (the overlap a detection needs to count, DESIGN.md).
+#: (the overlap a detection needs to count, docs/evaluation.md).
 MIN_CLUSTER_IOU = 0.25
 #: Constraints measured fewer times than this keep their prior...
 MIN_SAMPLES = 3

@@ -9,11 +9,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InvalidParameterError
-from ..evaluation._dataset import (
-    SceneSource,
-    _natural_key,
-    scene_group,
-)
+from ..io._layouts import SceneSource, natural_key, scene_group
 
 
 # -- split ---------------------------------------------------------------------------------
@@ -39,7 +35,7 @@ class SceneSplit:
     def groups(self, side: str) -> list[str]:
         """Rooms on one side (``"calibration"`` or ``"held_out"``)."""
         items = getattr(self, side)
-        return sorted({_group_of(s) for s in items}, key=_natural_key)
+        return sorted({_group_of(s) for s in items}, key=natural_key)
 
     def describe(self) -> str:
         """One line naming the rooms of each side and how they were drawn."""
@@ -100,7 +96,7 @@ def split_scenes(scenes: Sequence[Any], fraction: float = 0.5, seed: int = 0) ->
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise InvalidParameterError("seed", "a non-negative integer", seed)
     items = list(scenes)
-    groups = sorted({_group_of(s) for s in items}, key=_natural_key)
+    groups = sorted({_group_of(s) for s in items}, key=natural_key)
     if not groups:
         raise InvalidParameterError("scenes", "at least one scene", "none")
     if fraction < 1.0 and len(groups) < 2:

@@ -11,6 +11,7 @@ from rich.table import Table
 from ..io import atomic_write_text
 from ..io._layouts import DATASET_FORMATS
 from . import app
+from ._common import load_config
 from ._console import console, err_console, reporting, state
 from ._defaults import (
     MIN_GAIN_ROOMS,
@@ -19,7 +20,6 @@ from ._defaults import (
     PRIOR_SIGMA_SHARE,
     PRIOR_STRENGTH,
 )
-from .evaluate import detect_options
 
 
 def _pct(x: float) -> str:
@@ -104,9 +104,12 @@ def calibrate(
     """Estimate each constraint's mean and sigma from labelled objects; check on held-out rooms."""
     from ..calibrate import FitSettings, calibrate_dataset  # lazy: CLI start-up
 
-    opts = detect_options(
-        config, set_, None, False, room, None, None, up, scale, threshold, None, None, 0
-    )
+    opts: dict = {
+        "config": load_config(config, set_, up=up, scale=scale, threshold=threshold),
+        "seed": 0,
+    }
+    if room is not None:
+        opts["room"] = room
     settings = FitSettings(
         prior_share=sigma_floor,
         quantile=quantile,

@@ -83,7 +83,16 @@ def detect(
     from ..outputs import write_outputs  # lazy: CLI start-up
     from ..pipeline import detect as run_detect  # lazy: CLI start-up
 
-    cfg = load_config(config, set_)
+    cfg = load_config(
+        config,
+        set_,
+        up=up,
+        scale=scale,
+        threshold=threshold,
+        beta=beta,
+        context=context,
+        votes=votes,
+    )
     onto = load_ontology_option(ontology, ontology_only)
     room_arg = room_option(room, room_probs)
     eye = number_list(viewpoint, float, "--viewpoint")
@@ -97,13 +106,7 @@ def detect(
             ontology=onto,
             room=room_arg,
             indoor=indoor,
-            threshold=threshold,
-            beta=beta,
-            context=context,
-            votes=votes,
             seed=seed,
-            up=up,
-            scale=scale,
             viewpoint=eye,
         )
         object_map = None

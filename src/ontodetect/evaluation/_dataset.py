@@ -15,7 +15,7 @@ Each scene is an independent unit of work: :func:`evaluate_scene` reads it, runs
 :class:`SceneOutcome`; :func:`summarize_outcomes` merges the outcomes in scene order into a
 :class:`DatasetEvaluation`. :func:`evaluate_dataset` is that map and merge, run in worker
 processes with ``jobs > 1``; any other engine that maps a function over a list can run it
-the same way (DESIGN.md, "Scale").
+the same way (docs/architecture.md, "Scale").
 """
 
 from __future__ import annotations
@@ -25,7 +25,6 @@ import functools
 import inspect
 import math
 import os
-import re
 import time
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -38,20 +37,22 @@ import numpy as np
 from .._parallel import cpu_count, pool_context
 from .._progress import progress
 from ..cloud import PointCloud, sensor_position
-from ..config import Config
+from ..config import COUNT, Config, check_param
 from ..errors import (
     CorruptFileError,
     InvalidParameterError,
     OntoDetectError,
-    ReadError,
-    UnsupportedFormatError,
-    WriteError,
 )
 from ..geometry import yaw_pose
-from ..io import read_cloud
+from ..io import make_folder, read_cloud
 from ..io._detections import read_detections, write_detections
 from ..io._labels import NYU40_NAMES
-from ..io._layouts import DATASET_FORMATS
+from ..io._layouts import (
+    DATASET_FORMATS,
+    SceneSource,
+    discover_scenes,
+    scene_group,
+)
 from ..ontology import builtin_ontology
 from ..pipeline import detect
 from ..synth import load_synth
@@ -81,8 +82,7 @@ __all__ = [
 ]
 
 #: Other names accepted for a layout.
-FORMAT_ALIASES = {"synth": "ontodetect", "votenet": "scannet-votenet"}
-#: The three ways a detection is scored: key -> (criterion, IoU threshold). DESIGN.md:
+#: The three ways a detection is scored: key -> (criterion, IoU threshold) (docs/evaluation.md):
 #: point IoU >= 0.25 counts, 0.5 is reported too; the centre distance of Günther et al.
 CRITERIA: dict[str, tuple[str, float]] = {
     "iou@0.25": ("iou", 0.25),
@@ -91,14 +91,8 @@ CRITERIA: dict[str, tuple[str, float]] = {
 }
 #: The criterion reports lead with.
 PRIMARY = "iou@0.25"
-#: Folder levels below the dataset folder searched for scenes (dataset / area / room).
-MAX_DEPTH = 2
 #: Format tag of the JSON form of a dataset evaluation.
 EVALUATION_FORMAT = "ontodetect.evaluation/1"
-
-_VOTENET_SUFFIX = "_vert.npy"
-_SCANNET_MESH = "_vh_clean_2.ply"
-_SCAN_ID = re.compile(r"(scene\d{4})_\d{2}")
 
 
 class SceneError(OntoDetectError):
@@ -111,148 +105,6 @@ class SceneError(OntoDetectError):
 
     def __reduce__(self) -> tuple[Any, ...]:
         return (SceneError, (self.scene, self.problem))
-
-
-# -- discovery -----------------------------------------------------------------------------
-@dataclass(frozen=True)
-class SceneSource:
-    """Where one scene of a dataset is and how to read it.
-
-    Attributes
-    ----------
-    name : str
-        Unique within the dataset: the scan id (``scene0000_00``) or the folder's path
-        relative to the dataset folder (``scene_0003``, ``Area_1/office_2``). Stored
-        detections are looked up as ``<detections dir>/<name>/detections.json``.
-    path : str
-        The scene folder, or the ``*_vert.npy`` file of a VoteNet scan.
-    format : str
-        ``ontodetect``, ``scannet``, ``scannet-votenet`` or ``s3dis``.
-    group : str
-        Scans of the same space share a group (rescans ``scene0000_00``/``_01`` are
-        group ``scene0000``); calibration keeps a group on one side of a split.
-    """
-
-    name: str
-    path: str
-    format: str
-    group: str
-
-
-def scene_group(name: str) -> str:
-    """The room a scan belongs to: ScanNet rescans of one space share it.
-
-    Examples
-    --------
-    >>> scene_group("scene0000_02"), scene_group("val/scene0011_01"), scene_group("office_1")
-    ('scene0000', 'val/scene0011', 'office_1')
-    """
-    m = _SCAN_ID.search(name)
-    if m is None:
-        return name
-    return name[: m.start()] + m.group(1)
-
-
-def _natural_key(text: str) -> list[Any]:
-    # office_2 before office_10
-    return [int(t) if t.isdigit() else t for t in re.split(r"(\d+)", text)]
-
-
-def _folder_layout(folder: Path) -> str | None:
-    """The layout of a folder that holds exactly one scene, or None."""
-    if (folder / "scene.json").is_file() and (folder / "cloud.ply").is_file():
-        return "ontodetect"
-    if (folder / "Annotations").is_dir():
-        return "s3dis"
-    if any(folder.glob(f"*{_SCANNET_MESH}")):
-        return "scannet"
-    return None
-
-
-def _normalise_format(fmt: str) -> str:
-    name = FORMAT_ALIASES.get(str(fmt).lower(), str(fmt).lower())
-    if name not in DATASET_FORMATS:
-        raise InvalidParameterError("format", f"one of {', '.join(DATASET_FORMATS)}", fmt)
-    return name
-
-
-def _scenes_in(folder: Path, root: Path, fmt: str, depth: int) -> list[SceneSource]:
-    rel = folder.relative_to(root).as_posix()
-    layout = _folder_layout(folder)
-    if layout is not None and fmt in ("auto", layout):
-        name = folder.name if rel == "." else rel
-        return [SceneSource(name, str(folder), layout, scene_group(name))]
-    out = []
-    if fmt in ("auto", "scannet-votenet"):
-        prefix = "" if rel == "." else f"{rel}/"
-        for vert in folder.glob(f"*{_VOTENET_SUFFIX}"):
-            name = prefix + vert.name[: -len(_VOTENET_SUFFIX)]
-            out.append(SceneSource(name, str(vert), "scannet-votenet", scene_group(name)))
-    if depth < MAX_DEPTH:
-        for sub in folder.iterdir():
-            if sub.is_dir() and not sub.name.startswith((".", "__")):
-                out += _scenes_in(sub, root, fmt, depth + 1)
-    return out
-
-
-def discover_scenes(path: str | os.PathLike[str], format: str = "auto") -> list[SceneSource]:
-    """Find the scenes of a dataset folder (or the one scene a path is).
-
-    Parameters
-    ----------
-    path : str or PathLike
-        A dataset folder, a scene folder, or a scene's file (``*_vert.npy``,
-        ``*_vh_clean_2.ply``, a synthetic scene's ``cloud.ply``).
-    format : {"auto", "ontodetect", "scannet", "scannet-votenet", "s3dis"}
-        Layout to look for; "auto" recognises each folder by its files. Folders are
-        searched up to two levels deep (dataset / area / room).
-
-    Returns
-    -------
-    list of SceneSource
-        In natural order of their names (``office_2`` before ``office_10``).
-
-    Raises
-    ------
-    ReadError
-        The path does not exist or holds no scene of the layout asked for.
-
-    Examples
-    --------
-    >>> import tempfile, pathlib, numpy as np
-    >>> d = pathlib.Path(tempfile.mkdtemp())
-    >>> for s in ("scene0001_00", "scene0001_01"):
-    ...     np.save(d / f"{s}_vert.npy", np.zeros((1, 6), np.float32))
-    >>> [(s.name, s.format, s.group) for s in discover_scenes(d)]
-    [('scene0001_00', 'scannet-votenet', 'scene0001'), ('scene0001_01', 'scannet-votenet', 'scene0001')]
-    """  # noqa: E501
-    fmt = _normalise_format(format)
-    p = Path(path)
-    if not p.exists():
-        raise ReadError(p, "no such file or folder")
-    if p.is_file():
-        name = p.name
-        for suffix in (_VOTENET_SUFFIX, "_sem_label.npy", "_ins_label.npy"):
-            if name.endswith(suffix) and fmt in ("auto", "scannet-votenet"):
-                scene = name[: -len(suffix)]
-                vert = p.with_name(scene + _VOTENET_SUFFIX)
-                return [SceneSource(scene, str(vert), "scannet-votenet", scene_group(scene))]
-        layout = _folder_layout(p.parent)
-        if layout is not None and fmt in ("auto", layout):
-            return [SceneSource(p.parent.name, str(p.parent), layout, scene_group(p.parent.name))]
-        raise UnsupportedFormatError(
-            p, "is not a scene of a known dataset layout", list(DATASET_FORMATS[1:])
-        )
-    found = _scenes_in(p, p, fmt, 0)
-    if not found:
-        what = "any known layout" if fmt == "auto" else f"the {fmt!r} layout"
-        raise ReadError(
-            p,
-            f"holds no scene of {what} (looked for synthetic scenes with scene.json + "
-            f"cloud.ply, *{_VOTENET_SUFFIX}, *{_SCANNET_MESH} and S3DIS Annotations/ "
-            f"up to {MAX_DEPTH} folders deep)",
-        )
-    return sorted(found, key=lambda s: _natural_key(s.name))
 
 
 # -- loading -------------------------------------------------------------------------------
@@ -619,10 +471,7 @@ def _check_variants(name: str, values: Sequence[Any] | None, kind: type) -> list
 
 
 def _save_detections(result: Any, folder: Path) -> None:
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise WriteError(folder, f"cannot create the folder ({exc.strerror})") from exc
+    make_folder(folder)
     doc = result.to_dict()
     doc["classes"] = result.class_names
     write_detections(folder / "detections.json", doc)
@@ -634,9 +483,7 @@ R = TypeVar("R")
 
 
 def _check_jobs(jobs: int) -> int:
-    if isinstance(jobs, bool) or not isinstance(jobs, (int, np.integer)) or jobs < 0:
-        raise InvalidParameterError("jobs", "a non-negative integer (0: one per CPU)", jobs)
-    return int(jobs) or cpu_count()
+    return check_param("jobs", COUNT, jobs) or cpu_count()  # 0: one per CPU
 
 
 def map_scenes(
@@ -706,7 +553,7 @@ class DatasetEvaluation:
 
     @property
     def primary(self) -> Evaluation:
-        """The evaluation at point IoU >= 0.25 (DESIGN.md)."""
+        """The evaluation at point IoU >= 0.25, the main criterion (docs/evaluation.md)."""
         return self.evaluations[PRIMARY]
 
     def scene_seconds(self) -> dict[str, float]:

@@ -1,4 +1,4 @@
-"""Matching detections to ground-truth instances (DESIGN.md, "Ground truth and scoring").
+"""Matching detections to ground-truth instances (docs/evaluation.md, "How a detection is scored").
 
 A detection is a true positive when its point set overlaps an unmatched
 ground-truth instance of the same class with IoU >= the threshold; detections
@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..config import SHARE, check_param
 from ..errors import InvalidParameterError
 from ..geometry import point_overlap
 
@@ -170,7 +171,7 @@ def match_instances(
     preds, gts : sequences of Instance
         Detections and ground-truth instances.
     criterion : {"iou", "distance"}
-        Point-set IoU >= ``iou_threshold`` (DESIGN.md), or centre distance within
+        Point-set IoU >= ``iou_threshold`` (docs/evaluation.md), or centre distance within
         the class's threshold (Günther et al.).
     class_agnostic : bool
         Match regardless of class (for the confusion matrix).
@@ -185,8 +186,7 @@ def match_instances(
     """
     if criterion not in ("iou", "distance"):
         raise InvalidParameterError("criterion", "'iou' or 'distance'", criterion)
-    if not 0.0 < iou_threshold <= 1.0:
-        raise InvalidParameterError("iou_threshold", "a number in (0, 1]", iou_threshold)
+    check_param("iou_threshold", SHARE, iou_threshold)
     thresholds = {**DISTANCE_THRESHOLDS, **(distance_thresholds or {})}
     iou, _ = overlap_matrix(preds, gts)
     pred_match = np.full(len(preds), -1, dtype=np.int64)

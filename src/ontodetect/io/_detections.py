@@ -1,15 +1,17 @@
 """``detections.json``: the contract between ontodetect and whoever uses its results.
 
-The layout is fixed in DESIGN.md (format ``ontodetect.detections/1``); extra keys
-are allowed, the listed ones keep their meaning. :func:`read_detections` checks
-every listed key so that evaluation of stored results fails with a clear message
-instead of a wrong score.
+The layout is documented key by key in docs/detections-format.md (format
+``ontodetect.detections/1``), with a JSON Schema shipped in the package
+(:func:`detections_schema`); extra keys are allowed, the listed ones keep their
+meaning. :func:`read_detections` checks every required key so that evaluation of
+stored results fails with a clear message instead of a wrong score.
 """
 
 from __future__ import annotations
 
 import json
 import os
+from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -18,9 +20,31 @@ from ..geometry import jsonable
 from ._atomic import atomic_write_text
 from ._textfile import read_text
 
-__all__ = ["DETECTIONS_FORMAT", "read_detections", "validate_detections", "write_detections"]
+__all__ = [
+    "DETECTIONS_FORMAT",
+    "detections_schema",
+    "read_detections",
+    "validate_detections",
+    "write_detections",
+]
 
+#: Format tag of detections.json, the one definition (``pipeline.Result.to_dict`` uses it).
 DETECTIONS_FORMAT = "ontodetect.detections/1"
+
+
+def detections_schema() -> dict[str, Any]:
+    """The JSON Schema (draft 2020-12) of ``detections.json``, shipped in the package.
+
+    A fresh dictionary on every call. Validate with any JSON Schema library, e.g.
+    ``jsonschema.validate(doc, detections_schema())``.
+
+    Examples
+    --------
+    >>> detections_schema()["properties"]["format"]["const"] == DETECTIONS_FORMAT
+    True
+    """
+    text = resources.files("ontodetect").joinpath("data/detections.schema.json").read_text("utf-8")
+    return json.loads(text)
 
 
 def write_detections(path: str | os.PathLike[str], document: dict[str, Any]) -> Path:

@@ -9,11 +9,12 @@ surface stays dense whatever the sensor's resolution.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial import cKDTree
 
-from ..errors import InvalidParameterError
+from ..config import POSITIVE, Interval, OneOf, check_param
 from ..geometry import as_points
 from ._voxel import voxelize
 
@@ -65,11 +66,11 @@ def statistical_outlier_mask(
     >>> bool(keep[-1]), int(keep.sum())
     (False, 100)
     """
+    from scipy.spatial import cKDTree  # heavy: imported when used (start-up)
+
     pts = as_points(points)
-    if int(neighbors) < 1:
-        raise InvalidParameterError("neighbors", "an int in the range [1, inf)", neighbors)
-    if not std_ratio > 0:
-        raise InvalidParameterError("std_ratio", "a float in the range (0, inf)", std_ratio)
+    check_param("neighbors", Interval(1, math.inf, "left", integer=True), neighbors)
+    check_param("std_ratio", POSITIVE, std_ratio)
     n = len(pts)
     k = min(int(neighbors), n - 1)
     if k < 1:
@@ -90,9 +91,10 @@ def radius_outlier_mask(
     >>> radius_outlier_mask([[0, 0, 0], [0.01, 0, 0], [0, 0.01, 0], [1, 1, 1]], 0.05).tolist()
     [True, True, True, False]
     """
+    from scipy.spatial import cKDTree  # heavy: imported when used (start-up)
+
     pts = as_points(points)
-    if not radius > 0:
-        raise InvalidParameterError("radius", "a float in the range (0, inf)", radius)
+    check_param("radius", POSITIVE, radius)
     if len(pts) == 0:
         return np.ones(0, dtype=bool)
     counts = cKDTree(pts).query_ball_point(pts, radius, return_length=True, workers=-1)
@@ -117,8 +119,7 @@ def far_outlier_mask(
     False
     """
     pts = as_points(points)
-    if not 0 <= percentile < 50:
-        raise InvalidParameterError("percentile", "a float in the range [0, 50)", percentile)
+    check_param("percentile", Interval(0.0, 50.0, "left"), percentile)
     if len(pts) == 0:
         return np.ones(0, dtype=bool)
     # Percentiles of an even thinning are as good and cost a fraction on big clouds.
@@ -172,10 +173,7 @@ def denoise(
     (False, 5000)
     """
     pts = as_points(points)
-    if method not in DENOISE_METHODS:
-        raise InvalidParameterError(
-            "method", "one of " + ", ".join(map(repr, DENOISE_METHODS)), method
-        )
+    check_param("method", OneOf(DENOISE_METHODS), method)
     keep = (
         far_outlier_mask(pts, far_percentile, far_margin)
         if np.isfinite(far_margin)

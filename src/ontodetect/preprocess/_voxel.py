@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..config import POSITIVE, check_param
 from ..errors import InvalidParameterError
 
 __all__ = ["VoxelGrid", "grouped_covariance", "voxel_keys", "voxelize"]
@@ -166,8 +167,7 @@ def voxelize(
     pts = np.asarray(points, dtype=np.float64)
     if pts.ndim != 2 or pts.shape[1] != 3:
         raise InvalidParameterError("points", "an array of shape (n, 3)", f"shape {pts.shape}")
-    if not size > 0:
-        raise InvalidParameterError("size", "a float in the range (0, inf)", size)
+    check_param("size", POSITIVE, size)
     n = len(pts)
     use = np.ones(n, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
     if use.shape != (n,):
