@@ -258,3 +258,14 @@ def test_the_cli_shows_the_library_defaults(name):
 
     _, module, there = next(c for c in _defaults.COPIES if c[0] == name)
     assert getattr(_defaults, name) == getattr(importlib.import_module(module), there)
+
+
+def test_detect_is_importable_from_the_package_without_loading_it_first():
+    loaded = _fresh_modules("import ontodetect")
+    assert "ontodetect.pipeline" not in loaded  # import ontodetect stays light
+    loaded = _fresh_modules(
+        "from ontodetect import Config, Detection, Result, detect\n"
+        "from ontodetect.pipeline import detect as d2\n"
+        "assert detect is d2 and Config().detect.votes == 3"
+    )
+    assert "ontodetect.pipeline" in loaded
