@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 import yaml
 
+from ..config import NON_NEGATIVE, Boolean, Interval, check_param
 from ..errors import InvalidParameterError
 from ..ontology import Gaussian, parse_ontology
 from ._settings import (
@@ -76,20 +77,14 @@ class FitSettings:
 
     def __post_init__(self) -> None:
         for name in ("prior_share", "prior_strength"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not (
-                isinstance(value, (int, float)) and math.isfinite(value) and value >= 0.0
-            ):
-                raise InvalidParameterError(name, "a finite number >= 0", value)
-        if not (isinstance(self.quantile, (int, float)) and 0.0 <= self.quantile < 0.5):
-            raise InvalidParameterError("quantile", "a number in [0, 0.5)", self.quantile)
+            check_param(name, NON_NEGATIVE, getattr(self, name))
+        check_param("quantile", Interval(0.0, 0.5, "left"), self.quantile)
         for name in ("min_samples", "min_rooms", "room_samples", "min_gain_rooms"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise InvalidParameterError(name, "a positive integer", value)
         for name in ("validate", "accept_ties"):
-            if not isinstance(getattr(self, name), bool):
-                raise InvalidParameterError(name, "True or False", getattr(self, name))
+            check_param(name, Boolean(), getattr(self, name))
 
     @property
     def validation_rooms(self) -> int:

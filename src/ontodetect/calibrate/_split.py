@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from ..config import COUNT, SHARE, check_param
 from ..errors import InvalidParameterError
 from ..io._layouts import SceneSource, natural_key, scene_group
 
@@ -87,14 +88,8 @@ def split_scenes(scenes: Sequence[Any], fraction: float = 0.5, seed: int = 0) ->
     >>> sorted(s.groups("calibration") + s.groups("held_out"))
     ['scene0000', 'scene0002', 'scene0003']
     """
-    if (
-        isinstance(fraction, bool)
-        or not isinstance(fraction, (int, float))
-        or not (0.0 < fraction <= 1.0)
-    ):
-        raise InvalidParameterError("split", "a share of the rooms in (0, 1]", fraction)
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise InvalidParameterError("seed", "a non-negative integer", seed)
+    check_param("split", SHARE, fraction)  # a share of the rooms
+    seed = check_param("seed", COUNT, seed)
     items = list(scenes)
     groups = sorted({_group_of(s) for s in items}, key=natural_key)
     if not groups:

@@ -9,7 +9,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..config import Interval, check_param
-from ..errors import InvalidParameterError
+from ..geometry import as_points
 
 __all__ = ["estimate_normals", "graph_normals", "smooth_surface"]
 
@@ -69,9 +69,7 @@ def estimate_normals(
     >>> bool(np.allclose(n, [0, 0, 1])), bool(v.max() < 1e-9)
     (True, True)
     """
-    pts = np.asarray(points, dtype=np.float64)
-    if pts.ndim != 2 or pts.shape[1] != 3:
-        raise InvalidParameterError("points", "an array of shape (n, 3)", f"shape {pts.shape}")
+    pts = as_points(points)
     check_param("neighbors", Interval(3, math.inf, "left", integer=True), neighbors)
     if len(pts) < 3:
         return np.tile([0.0, 0.0, 1.0], (len(pts), 1)), np.zeros(len(pts))

@@ -9,6 +9,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..config import POSITIVE, check_param
 from ..errors import InvalidParameterError
+from ..geometry import as_points
 
 __all__ = ["VoxelGrid", "grouped_covariance", "voxel_keys", "voxelize"]
 
@@ -164,9 +165,7 @@ def voxelize(
     >>> g.centers[0].tolist()
     [0.002, 0.0, 0.0]
     """
-    pts = np.asarray(points, dtype=np.float64)
-    if pts.ndim != 2 or pts.shape[1] != 3:
-        raise InvalidParameterError("points", "an array of shape (n, 3)", f"shape {pts.shape}")
+    pts = as_points(points)
     check_param("size", POSITIVE, size)
     n = len(pts)
     use = np.ones(n, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
