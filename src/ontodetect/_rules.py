@@ -18,6 +18,7 @@ __all__ = [
     "COUNT",
     "FRACTION",
     "NON_NEGATIVE",
+    "ON_NONFINITE",
     "POSITIVE",
     "SHARE",
     "Boolean",
@@ -176,6 +177,8 @@ POSITIVE = Interval(0.0, math.inf)
 NON_NEGATIVE = Interval(0.0, math.inf, "left")
 FRACTION = Interval(0.0, 1.0, "both")
 ANGLE = Interval(0.0, 90.0, "both")
+#: What a reader does with points whose coordinates are not finite.
+ON_NONFINITE = OneOf(("warn", "drop", "raise"))
 #: A share that cannot be empty: an overlap threshold, a part of the rooms.
 SHARE = Interval(0.0, 1.0, "right")
 #: A number of things: workers, passes, neighbours (0 allowed).

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ._rules import ON_NONFINITE, check_param
 from .errors import InvalidParameterError
 from .geometry import as_points
 
@@ -340,8 +341,7 @@ def point_cloud(
     >>> len(c), c.index.tolist()
     (2, [0, 2])
     """
-    if on_nonfinite not in ("warn", "drop", "raise"):
-        raise InvalidParameterError("on_nonfinite", "one of 'warn', 'drop', 'raise'", on_nonfinite)
+    check_param("on_nonfinite", ON_NONFINITE, on_nonfinite)
     pts = as_points(xyz, "xyz", copy=copy)
     n = pts.shape[0]
     cols = None if rgb is None else _as_colors(rgb, n, copy)

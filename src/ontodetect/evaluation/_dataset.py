@@ -37,7 +37,7 @@ import numpy as np
 from .._parallel import cpu_count, pool_context
 from .._progress import progress
 from ..cloud import PointCloud, sensor_position
-from ..config import COUNT, Config, check_param
+from ..config import COUNT, Config, Interval, check_param
 from ..errors import (
     CorruptFileError,
     InvalidParameterError,
@@ -378,8 +378,7 @@ def evaluate_scene(
         Name of the outcome and of its folder under ``save_dir`` (default: the scene's).
     """
     opts = _check_detect_options(detect_options)
-    if isinstance(turn, bool) or not isinstance(turn, (int, float)) or not math.isfinite(turn):
-        raise InvalidParameterError("turn", "a finite angle in degrees", turn)
+    check_param("turn", Interval(), turn)  # degrees, any finite angle
     if turn and detections_dir is not None:
         raise InvalidParameterError(
             "turn", "0 when scoring stored detections (they were made on the scan as it is)", turn
