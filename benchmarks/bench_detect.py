@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from benchmarks import _open3d_recipe as o3d_recipe
+from ontodetect.config import Config
 from ontodetect.io import read_cloud
 from ontodetect.pipeline import detect
 
@@ -61,11 +62,12 @@ def main(argv: list[str] | None = None) -> None:
     )
     print("| scene | points | detections | ontodetect detect (s) | Open3D recipe (s) | ratio |")
     print("|---|---:|---:|---:|---:|---:|")
+    config = Config() if args.votes is None else Config().replace(detect={"votes": args.votes})
     ours, theirs = [], []
     for path in scenes:
         cloud = read_cloud(path)
-        result = detect(cloud, votes=args.votes)  # warm-up, and the count
-        t_ours = _median_time(lambda c=cloud: detect(c, votes=args.votes), args.repeat)
+        result = detect(cloud, config=config)  # warm-up, and the count
+        t_ours = _median_time(lambda c=cloud: detect(c, config=config), args.repeat)
         t_o3d = _median_time(lambda c=cloud: open3d_recipe(np.array(c.xyz)), args.repeat)
         ours.append(t_ours)
         theirs.append(t_o3d)

@@ -11,16 +11,19 @@ time. Beside them, in the same run, the floors and the obvious alternative:
 
 The ratio column is each command's median over the interpreter's. Runs alternate
 between the commands so that a change in the machine's load touches all alike.
-Also lists which heavy libraries ``import ontodetect.cli`` loads (none should be).
+Also gives the cumulative import time of ``ontodetect.cli`` (``python -X importtime``) and
+lists which heavy libraries it loads (none should). ``--src`` points at another source tree
+(``PYTHONPATH``) to measure another version on the same machine, for before/after figures.
 
 Run::
 
-    python -m benchmarks startup [--repeat 9] [--target 0.3]
+    python -m benchmarks startup [--repeat 9] [--target 0.3] [--src DIR]
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import subprocess
 import sys
@@ -52,28 +55,49 @@ def _small_ply(folder: Path) -> Path:
     return path
 
 
-def _time(cmd: list[str]) -> float:
+def _time(cmd: list[str], env: dict[str, str]) -> float:
     start = time.perf_counter()
-    done = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, check=False)
+    done = subprocess.run(
+        cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, check=False
+    )
     elapsed = time.perf_counter() - start
     if done.returncode != 0:
         raise SystemExit(f"{' '.join(cmd)} failed: {done.stderr.decode(errors='replace')[-400:]}")
     return elapsed
 
 
-def heavy_modules_on_import() -> list[str]:
+def heavy_modules_on_import(env: dict[str, str]) -> list[str]:
     """Heavy libraries a fresh interpreter holds after ``import ontodetect.cli``."""
     code = f"import sys, ontodetect.cli; print(' '.join(m for m in {HEAVY!r} if m in sys.modules))"
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    out = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
+    )
     return out.stdout.split()
+
+
+def import_ms(env: dict[str, str]) -> float:
+    """Cumulative import time (ms) of ``ontodetect.cli`` in a fresh interpreter."""
+    done = subprocess.run(
+        [sys.executable, "-X", "importtime", "-c", "import ontodetect.cli"],
+        env=env,
+        check=True,
+        capture_output=True,
+        text=True,
+    )
+    last = done.stderr.strip().splitlines()[-1]  # "import time: self | cumulative | name"
+    return int(last.split("|")[1]) / 1000
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=9, help="runs of each command")
     parser.add_argument("--target", type=float, default=TARGET_SECONDS, help="target (s)")
+    parser.add_argument(
+        "--src", type=Path, default=Path(__file__).parents[1] / "src", help="source tree"
+    )
     args = parser.parse_args(argv)
     py = sys.executable
+    env = {**os.environ, "PYTHONPATH": str(args.src.resolve())}
     with tempfile.TemporaryDirectory() as tmp:
         ply = _small_ply(Path(tmp))
         commands = {
@@ -87,13 +111,13 @@ def main(argv: list[str] | None = None) -> int:
         times: dict[str, list[float]] = {name: [] for name in commands}
         for name, cmd in commands.items():  # one untimed run each: page cache, .pyc files
             try:
-                _time(cmd)
+                _time(cmd, env)
             except SystemExit as exc:
                 print(f"skipping {name}: {exc}", file=sys.stderr)
                 times.pop(name)
         for _ in range(args.repeat):
             for name in times:
-                times[name].append(_time(commands[name]))
+                times[name].append(_time(commands[name], env))
     floor = statistics.median(times["python -c pass (floor)"])
     print(f"Start-up, {args.repeat} runs each, whole processes (s); target {args.target:g} s\n")
     print("| command | min | median | max | median / interpreter |")
@@ -101,8 +125,9 @@ def main(argv: list[str] | None = None) -> int:
     for name, t in times.items():
         med = statistics.median(t)
         print(f"| {name} | {min(t):.3f} | {med:.3f} | {max(t):.3f} | {med / floor:.1f} |")
-    heavy = heavy_modules_on_import()
-    print(f"\nheavy libraries loaded by `import ontodetect.cli`: {', '.join(heavy) or 'none'}")
+    print(f"\n`import ontodetect.cli`: {import_ms(env):.0f} ms cumulative (python -X importtime)")
+    heavy = heavy_modules_on_import(env)
+    print(f"heavy libraries loaded by `import ontodetect.cli`: {', '.join(heavy) or 'none'}")
     slow = [
         n for n in times if n.startswith("ontodetect") and statistics.median(times[n]) > args.target
     ]

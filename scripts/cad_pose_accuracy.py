@@ -45,7 +45,7 @@ CLASSES = {"chair": "chair", "sofa": "sofa", "table": "table", "desk": "table"}
 ROOMS = "office,conference,dining_room,living_room,home_office,kitchen"
 #: Sides within this share of each other make a square table (yaw modulo 90 degrees).
 SQUARE = 0.05
-#: Matching a detection to a ground-truth instance (DESIGN.md: point IoU >= 0.25).
+#: Matching a detection to a ground-truth instance (docs/evaluation.md: point IoU >= 0.25).
 MIN_IOU = 0.25
 TARGET_YAW_DEG = 5.0
 TARGET_POSITION_M = 0.03

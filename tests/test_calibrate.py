@@ -10,16 +10,17 @@ import pytest
 import yaml
 
 from ontodetect import InvalidParameterError
-from ontodetect.evaluation import (
+from ontodetect.calibrate import (
     FitSettings,
     calibrate_dataset,
     calibrate_ontology,
     constraint_values,
-    discover_scenes,
     fit_gaussian,
     split_scenes,
 )
-from ontodetect.evaluation._calibrate import _builtin_text, _constraint_paths
+from ontodetect.calibrate._gaussian import _constraint_paths
+from ontodetect.calibrate._run import _builtin_text
+from ontodetect.evaluation import discover_scenes
 from ontodetect.ontology import ClusterDescription, Gaussian, parse_ontology, score_class
 
 SCANS = [
@@ -270,7 +271,7 @@ def test_constraint_values_are_the_features_of_the_best_assignment():
 def test_objects_are_measured_against_the_kind_of_their_class_that_fits():
     """The built-in table and side table both match NYU40 tables and desks: a small top
     calibrates the side table's rules, a long one the table's."""
-    from ontodetect.evaluation import best_kind
+    from ontodetect.calibrate import best_kind
     from ontodetect.evaluation._dataset import _class_id_lists, _class_ids
     from ontodetect.ontology import builtin_ontology
 
@@ -299,7 +300,7 @@ def _chair_scene(name):
 
 
 def test_a_change_that_lowers_validation_f1_is_rejected():
-    from ontodetect.evaluation._calibrate import select_groups
+    from ontodetect.calibrate import select_groups
 
     seat_height = ("chair", "parts", "seat", "height")
     cluster_length = ("chair", "cluster", "length")
@@ -327,7 +328,7 @@ def test_a_change_that_lowers_validation_f1_is_rejected():
 
 
 def test_one_room_cannot_be_checked_so_nothing_changes():
-    from ontodetect.evaluation._calibrate import select_groups
+    from ontodetect.calibrate import select_groups
 
     rooms = {"scene0001": {("chair", "cluster", "length"): [0.5, 0.55, 0.6]}}
     accepted, decisions = select_groups(
@@ -339,8 +340,8 @@ def test_one_room_cannot_be_checked_so_nothing_changes():
 def _chair_at(name, seat_height, back_top=1.1):
     """A validation scene with one chair whose seat is at ``seat_height``; its backrest
     rises from 0.5 m to ``back_top``, the top of the chair."""
+    from ontodetect.calibrate import ValidationScene
     from ontodetect.evaluation import Instance
-    from ontodetect.evaluation._calibrate import ValidationScene
 
     h, mid = seat_height, (0.5 + back_top) / 2
     seat = _plane(2.0, h, h - 0.01, h + 0.01, 0.45, 0.42, 0.17, (0.0, 0.0, h))
@@ -360,7 +361,7 @@ HIGH, LOW = 0.95, 0.46
 
 
 def _select(heights, **settings):
-    from ontodetect.evaluation._calibrate import select_groups
+    from ontodetect.calibrate import select_groups
 
     rooms = {f"scene000{i}": TALL_SEATS for i in range(1, len(heights) + 1)}
     scenes = {r: [_chair_at(r + "_00", h)] for r, h in zip(rooms, heights)}
@@ -370,7 +371,7 @@ def _select(heights, **settings):
 
 
 def test_the_chairs_of_the_nested_check_behave_as_intended():
-    from ontodetect.evaluation._calibrate import _detect_counts, _detection_params
+    from ontodetect.calibrate._groups import _detect_counts, _detection_params
 
     base = parse_ontology(ONTOLOGY)
     fitted = parse_ontology(
@@ -419,7 +420,7 @@ def test_a_gain_in_several_left_out_rooms_is_kept():
 
 
 def test_a_loss_in_any_left_out_room_rejects_the_gain_of_the_others():
-    from ontodetect.evaluation._calibrate import select_groups
+    from ontodetect.calibrate import select_groups
 
     # Seats measured around 1 m only: the fitted height finds the high chairs and loses
     # the low one.
@@ -437,7 +438,7 @@ def test_a_loss_in_any_left_out_room_rejects_the_gain_of_the_others():
 
 
 def test_fewer_false_alarms_count_as_a_gain_where_f1_is_zero():
-    from ontodetect.evaluation._calibrate import _room_sign
+    from ontodetect.calibrate._groups import _room_sign
 
     assert _room_sign(np.array([0, 1, 2]), np.array([0, 2, 2])) == 1
     assert _room_sign(np.array([0, 3, 2]), np.array([0, 2, 2])) == -1
@@ -532,7 +533,7 @@ def test_a_single_calibration_room_keeps_the_original_and_says_so(tiny_rooms, tm
 
 
 def test_softness_of_a_bound_only_loosens():
-    from ontodetect.evaluation import fit_gaussian
+    from ontodetect.calibrate import fit_gaussian
     from ontodetect.ontology import Gaussian
 
     prior = Gaussian(6.0, 5.0, "max")

@@ -78,7 +78,7 @@ def test_detect_explain_prints_constraints(scene, tmp_path, capsys):
     [
         (["--room", "spaceship"], "'room'"),
         (["--set", "cluster.radius=-1"], "cluster.radius"),
-        (["--threshold", "2"], "'threshold'"),
+        (["--threshold", "2"], "'detect.threshold'"),
         (["--votes", "0"], "'detect.votes'"),
         (["--viewpoint", "1,2"], "'--viewpoint'"),
         (["--viewpoint", "1,up,2"], "'--viewpoint'"),

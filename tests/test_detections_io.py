@@ -61,3 +61,62 @@ def test_bad_json(tmp_path):
     (tmp_path / "detections.json").write_text("{oops")
     with pytest.raises(CorruptFileError, match="not valid JSON"):
         read_detections(tmp_path / "detections.json")
+
+
+# -- the shipped JSON Schema ------------------------------------------------------------
+def _schema_errors(document):
+    import jsonschema
+
+    from ontodetect.io import detections_schema
+
+    validator = jsonschema.Draft202012Validator(detections_schema())
+    return [f"{e.json_path}: {e.message}" for e in validator.iter_errors(document)]
+
+
+def test_the_shipped_schema_is_a_valid_draft_2020_12_schema():
+    import jsonschema
+
+    from ontodetect.io import detections_schema
+
+    schema = detections_schema()
+    assert schema["$schema"] == "https://json-schema.org/draft/2020-12/schema"
+    jsonschema.Draft202012Validator.check_schema(schema)
+    assert detections_schema() is not detections_schema()  # a fresh copy each call
+
+
+def test_what_the_writer_writes_validates_against_the_schema(tmp_path):
+    p = write_detections(tmp_path / "detections.json", doc())
+    assert _schema_errors(json.loads(p.read_text())) == []
+
+
+def test_a_detection_result_validates_against_the_schema():
+    from ontodetect.config import Config
+    from ontodetect.pipeline import detect
+    from ontodetect.synth import synthesize
+
+    result = detect(synthesize("tiny", seed=1).cloud, config=Config().replace(detect={"votes": 1}))
+    document = json.loads(json.dumps(result.to_dict()))
+    assert document["detections"] and _schema_errors(document) == []
+
+
+@pytest.mark.parametrize(
+    ("change", "word"),
+    [
+        ({"format": "x"}, "format"),
+        ({"num_points": -1}, "minimum"),
+        ({"frame": {}}, "up"),
+        ({"detections": [{"id": 1, "label": "chair", "score": 0.5}]}, "box"),
+    ],
+)
+def test_the_schema_refuses_what_the_reader_refuses(change, word):
+    errors = _schema_errors(doc(**change))
+    assert errors and any(word in e for e in errors)
+
+
+def test_the_example_in_the_docs_validates():
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).parents[1] / "docs" / "detections-format.md").read_text("utf-8")
+    example = re.search(r"## An example\s+```json\n(.*?)```", text, re.S).group(1)
+    assert _schema_errors(json.loads(example)) == []

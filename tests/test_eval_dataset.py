@@ -10,6 +10,7 @@ import pytest
 
 from ontodetect import InvalidParameterError, ReadError, point_cloud, write_cloud
 from ontodetect.cloud import sensor_position
+from ontodetect.config import Config
 from ontodetect.evaluation import (
     NYU40_CLASSES,
     SceneError,
@@ -27,6 +28,9 @@ from ontodetect.evaluation import (
 from ontodetect.evaluation._dataset import turn_cloud
 from ontodetect.io._detections import write_detections
 from ontodetect.ontology import parse_ontology
+
+#: Detection options of one pass per scan (faster; the vote is tested in test_pipeline.py).
+ONE_PASS = {"config": Config().replace(detect={"votes": 1})}
 
 LABEL_TABLE = (
     "id\traw_category\tcategory\tcount\tnyu40id\tnyu40class\n"
@@ -327,7 +331,12 @@ def test_a_turned_single_view_turns_its_sensor_too():
 @pytest.mark.filterwarnings("ignore:no floor found")  # a line of points: nothing to find
 def test_runs_per_turn_and_seed_are_named_pooled_and_reported_per_turn(tmp_path):
     root = make_votenet(tmp_path / "dev", ("scene0000_00", "scene0001_00"))
-    ev = evaluate_dataset(root, turns=[0, 90], seeds=[0, 1], detect_options={"votes": 1})
+    ev = evaluate_dataset(
+        root,
+        turns=[0, 90],
+        seeds=[0, 1],
+        detect_options=ONE_PASS,
+    )
     assert [s.name for s in ev.scenes[:4]] == [
         "scene0000_00@0deg-seed0",
         "scene0000_00@0deg-seed1",
@@ -356,10 +365,10 @@ def test_runs_per_turn_and_seed_are_named_pooled_and_reported_per_turn(tmp_path)
     )
     assert len(doc["scenes"]) == 8
 
-    seeded = evaluate_dataset(root, seeds=[3, 4], detect_options={"votes": 1})
+    seeded = evaluate_dataset(root, seeds=[3, 4], detect_options=ONE_PASS)
     assert [s.name for s in seeded.scenes[:2]] == ["scene0000_00@seed3", "scene0000_00@seed4"]
     assert list(seeded.by_variant) == ["seed 3", "seed 4"]
-    assert evaluate_dataset(root, detect_options={"votes": 1}).by_variant == {}
+    assert evaluate_dataset(root, detect_options=ONE_PASS).by_variant == {}
 
 
 @pytest.mark.parametrize(

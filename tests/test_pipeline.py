@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from ontodetect import InvalidParameterError, point_cloud
+from ontodetect.config import Config
 from ontodetect.demo import run_demo
 from ontodetect.pipeline import detect
 from ontodetect.synth import synthesize
@@ -53,10 +54,16 @@ def test_point_indices_are_rows_of_the_input_file(dining):
 def test_bad_inputs():
     with pytest.raises(InvalidParameterError, match="'cloud'"):
         detect(np.zeros((10, 3)))
-    with pytest.raises(InvalidParameterError, match="none_likelihood"):
-        detect(point_cloud(np.zeros((10, 3))), none_likelihood=0)
+    # Settings of the detection are the configuration's, checked by one rule each.
+    with pytest.raises(InvalidParameterError, match=r"'detect\.none_likelihood'"):
+        detect(
+            point_cloud(np.zeros((10, 3))), config=Config().replace(detect={"none_likelihood": 0})
+        )
     with pytest.raises(InvalidParameterError, match=r"'detect\.votes'"):
-        detect(point_cloud(np.zeros((10, 3))), votes=0)
+        detect(point_cloud(np.zeros((10, 3))), config=Config().replace(detect={"votes": 0}))
+    for repeated in ("threshold", "beta", "none_likelihood", "context", "votes", "up", "scale"):
+        with pytest.raises(TypeError, match=repeated):
+            detect(point_cloud(np.zeros((10, 3))), **{repeated: 1})
 
 
 def test_demo_runs_and_scores_itself(tmp_path):
@@ -98,8 +105,8 @@ def test_shelter_is_the_highest_top_beside_a_cluster():
 def test_open_below_sees_the_floor_under_a_table_and_not_under_a_box(rng):
     """The floor shows under a table on legs; under a closed box (a cabinet) it was never
     seen. Only horizontal planes at least OPEN_BELOW_HEIGHT high are measured."""
-    from ontodetect.pipeline import OPEN_BELOW_HEIGHT, describe_clusters, open_below
     from ontodetect.segment import segment
+    from ontodetect.segment._measure import OPEN_BELOW_HEIGHT, describe_clusters, open_below
     from test_segmentation import rect, slab, table
 
     floor = rect(rng, (0, 0, 0), (5, 0, 0), (0, 3, 0), 0.03)
@@ -206,7 +213,7 @@ def test_vote_turns_alternate():
 def test_votes_keep_detections_in_the_input_frame(dining):
     from ontodetect.config import Config
 
-    one = detect(dining, votes=1)
+    one = detect(dining, config=Config().replace(detect={"votes": 1}))
     three = detect(dining, config=Config().replace(detect={"votes": 3}))
     # Passes in worker processes or all here: the same result.
     here = detect(dining, config=Config().replace(detect={"votes": 3}), jobs=1)
@@ -244,7 +251,7 @@ def test_vote_workers_fork_only_when_safe():
     import threading
 
     from ontodetect._parallel import cpu_count
-    from ontodetect.pipeline import _vote_workers
+    from ontodetect.pipeline._detect import _vote_workers
 
     assert _vote_workers(1, 2) == 0 and _vote_workers(4, 0) == 0
     assert _vote_workers(4, 2) == 2 and _vote_workers(2, 4) == 2

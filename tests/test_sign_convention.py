@@ -5,7 +5,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from ontodetect._transforms import SIGN_TIE_TOLERANCE, canonical_sign
+from ontodetect.geometry import SIGN_TIE_TOLERANCE, canonical_sign
 from ontodetect.segment.planes import PlaneModel
 
 TOL = SIGN_TIE_TOLERANCE

@@ -65,7 +65,7 @@ def test_a_bad_viewpoint_is_refused_by_name(bad):
 def test_a_viewpoint_without_a_pixel_grid_is_used_with_a_warning():
     scan = synthesize("tiny", seed=1).cloud  # fused from many frames: rows are no pixels
     with pytest.warns(DataWarning, match="pixel grid"):
-        detect(scan, viewpoint=[0.5, 0.5, 1.5], votes=1)
+        detect(scan, viewpoint=[0.5, 0.5, 1.5], config=Config().replace(detect={"votes": 1}))
 
 
 def test_pixel_grid_from_organized_rows_or_a_pixel_field():

@@ -10,12 +10,17 @@ Subpackages, in the order the data flows:
 - ``ontology``: probabilistic ontological scoring of clusters against object classes.
 - ``labeling``: energy minimisation that picks one label per cluster.
 - ``cad``: generic CAD models fitted with ground-constrained ICP; the object map.
+- ``pipeline``: :func:`detect`, the whole method in one call, and its output types.
 - ``evaluation``: precision, recall and reports against ground truth.
+- ``calibrate``: an ontology's Gaussians fitted to labelled scans.
+- ``geometry``: transforms, boxes, point-set overlap and shape checks several stages share.
 """
 
 from __future__ import annotations
 
+from ._version import __version__
 from .cloud import DataWarning, PointCloud, point_cloud
+from .config import Config
 from .errors import (
     CorruptFileError,
     InvalidOntologyError,
@@ -27,20 +32,34 @@ from .errors import (
 )
 from .io import read_cloud, write_cloud
 
-__version__ = "0.1.0"
-
 __all__ = [
+    "Config",
     "CorruptFileError",
     "DataWarning",
+    "Detection",
     "InvalidOntologyError",
     "InvalidParameterError",
     "OntoDetectError",
     "PointCloud",
     "ReadError",
+    "Result",
     "UnsupportedFormatError",
     "WriteError",
     "__version__",
+    "detect",
     "point_cloud",
     "read_cloud",
     "write_cloud",
 ]
+
+#: Names re-exported from ``pipeline``, imported when first used: ``import ontodetect``
+#: stays light (the CLI's start-up), ``from ontodetect import detect`` works.
+_FROM_PIPELINE = ("Detection", "Result", "detect")
+
+
+def __getattr__(name: str):
+    if name in _FROM_PIPELINE:
+        from . import pipeline  # lazy: import ontodetect without the stages (start-up)
+
+        return getattr(pipeline, name)
+    raise AttributeError(f"module 'ontodetect' has no attribute {name!r}")

@@ -18,7 +18,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ._rules import ON_NONFINITE, check_param
 from .errors import InvalidParameterError
+from .geometry import as_points
 
 __all__ = ["DataWarning", "PointCloud", "pixel_grid", "point_cloud", "sensor_position"]
 
@@ -258,17 +260,6 @@ class PointCloud:
         return pc
 
 
-def _as_points(name: str, a: ArrayLike, n: int | None, dtype: Any, copy: bool) -> NDArray[Any]:
-    arr = np.asarray(a)
-    if arr.ndim != 2 or arr.shape[1] != 3 or (n is not None and arr.shape[0] != n):
-        want = "(n, 3)" if n is None else f"({n}, 3)"
-        raise InvalidParameterError(name, f"an array of shape {want}", f"shape {arr.shape}")
-    if arr.dtype.kind not in "biuf":
-        raise InvalidParameterError(name, "a numeric array", f"dtype {arr.dtype}")
-    out = np.array(arr, dtype=dtype, copy=True) if copy else np.asarray(arr, dtype=dtype)
-    return np.ascontiguousarray(out)
-
-
 def _as_colors(a: ArrayLike, n: int, copy: bool) -> NDArray[np.uint8]:
     arr = np.asarray(a)
     if arr.ndim != 2 or arr.shape[0] != n or arr.shape[1] not in (3, 4):
@@ -350,12 +341,11 @@ def point_cloud(
     >>> len(c), c.index.tolist()
     (2, [0, 2])
     """
-    if on_nonfinite not in ("warn", "drop", "raise"):
-        raise InvalidParameterError("on_nonfinite", "one of 'warn', 'drop', 'raise'", on_nonfinite)
-    pts = _as_points("xyz", xyz, None, np.float64, copy)
+    check_param("on_nonfinite", ON_NONFINITE, on_nonfinite)
+    pts = as_points(xyz, "xyz", copy=copy)
     n = pts.shape[0]
     cols = None if rgb is None else _as_colors(rgb, n, copy)
-    nrm = None if normals is None else _as_points("normals", normals, n, np.float64, copy)
+    nrm = None if normals is None else as_points(normals, "normals", n=n, copy=copy)
     extra: dict[str, NDArray[Any]] = {}
     for name, values in (fields or {}).items():
         if not isinstance(name, str) or not name:

@@ -31,7 +31,6 @@ Examples
 from __future__ import annotations
 
 import dataclasses
-import math
 import os
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
@@ -40,16 +39,45 @@ from typing import Any, ClassVar
 
 import yaml
 
+from ._rules import (
+    ANGLE,
+    COUNT,
+    FRACTION,
+    NON_NEGATIVE,
+    POSITIVE,
+    SHARE,
+    Boolean,
+    Interval,
+    Nullable,
+    OneOf,
+    Pair,
+    _Rule,
+    check_param,
+)
 from .errors import InvalidParameterError, OntoDetectError, ReadError
+from .io._atomic import atomic_write_text
+from .io._textfile import read_text
 
 __all__ = [
+    "ANGLE",
+    "COUNT",
+    "FRACTION",
+    "NON_NEGATIVE",
+    "POSITIVE",
+    "SHARE",
+    "Boolean",
     "ClusterConfig",
     "Config",
     "ConfigValueError",
     "DetectConfig",
+    "Interval",
+    "Nullable",
+    "OneOf",
+    "Pair",
     "PlaneConfig",
     "PrepareConfig",
     "UnknownKeyError",
+    "check_param",
     "parse_override",
     "validate_section",
 ]
@@ -80,128 +108,11 @@ class ConfigValueError(InvalidParameterError):
         OntoDetectError.__init__(self, f"{source}: {error}")
 
 
-# -- rules ---------------------------------------------------------------------------------
-class _Rule:
-    """A constraint on one value: ``check`` returns the value, normalised, or raises."""
-
-    def describe(self) -> str:  # pragma: no cover - abstract
-        raise NotImplementedError
-
-    def check(self, name: str, value: Any) -> Any:  # pragma: no cover - abstract
-        raise NotImplementedError
-
-
-def _fmt(x: float) -> str:
-    if math.isinf(x):
-        return "inf" if x > 0 else "-inf"
-    return f"{x:g}"
-
-
-@dataclass(frozen=True)
-class Interval(_Rule):
-    """A real (or integer) number in a range; ``closed`` says which ends are included."""
-
-    lo: float = -math.inf
-    hi: float = math.inf
-    closed: str = "neither"  # "neither", "left", "right", "both"
-    integer: bool = False
-
-    def describe(self) -> str:
-        left = "[" if self.closed in ("left", "both") else "("
-        right = "]" if self.closed in ("right", "both") else ")"
-        kind = "an int" if self.integer else "a float"
-        return f"{kind} in the range {left}{_fmt(self.lo)}, {_fmt(self.hi)}{right}"
-
-    def contains(self, x: float) -> bool:
-        lo_ok = x >= self.lo if self.closed in ("left", "both") else x > self.lo
-        hi_ok = x <= self.hi if self.closed in ("right", "both") else x < self.hi
-        return lo_ok and hi_ok
-
-    def check(self, name: str, value: Any) -> Any:
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise InvalidParameterError(name, self.describe(), value)
-        if self.integer and isinstance(value, float) and not value.is_integer():
-            raise InvalidParameterError(name, self.describe(), value)
-        number = int(value) if self.integer else float(value)
-        if math.isnan(number) or not self.contains(number):
-            raise InvalidParameterError(name, self.describe(), value)
-        return number
-
-
-@dataclass(frozen=True)
-class Pair(_Rule):
-    """Two numbers ``[low, high]`` with ``low <= high``, both obeying ``each``."""
-
-    each: Interval
-
-    def describe(self) -> str:
-        return f"a pair [low, high] with low <= high, each {self.each.describe()}"
-
-    def check(self, name: str, value: Any) -> Any:
-        if not isinstance(value, (list, tuple)) or len(value) != 2:
-            raise InvalidParameterError(name, self.describe(), value)
-        try:
-            lo, hi = (self.each.check(name, v) for v in value)
-        except InvalidParameterError:
-            raise InvalidParameterError(name, self.describe(), value) from None
-        if lo > hi:
-            raise InvalidParameterError(name, self.describe(), value)
-        return (lo, hi)
-
-
-@dataclass(frozen=True)
-class OneOf(_Rule):
-    """One of a fixed set of strings."""
-
-    options: tuple[str, ...]
-
-    def describe(self) -> str:
-        return "one of " + ", ".join(repr(o) for o in self.options)
-
-    def check(self, name: str, value: Any) -> Any:
-        if not isinstance(value, str) or value not in self.options:
-            raise InvalidParameterError(name, self.describe(), value)
-        return value
-
-
-@dataclass(frozen=True)
-class Boolean(_Rule):
-    def describe(self) -> str:
-        return "true or false"
-
-    def check(self, name: str, value: Any) -> Any:
-        if not isinstance(value, bool):
-            raise InvalidParameterError(name, self.describe(), value)
-        return value
-
-
-@dataclass(frozen=True)
-class Nullable(_Rule):
-    """``None`` (meaning "automatic" or "off") or a value obeying ``rule``."""
-
-    rule: _Rule
-
-    def describe(self) -> str:
-        return f"null or {self.rule.describe()}"
-
-    def check(self, name: str, value: Any) -> Any:
-        if value is None:
-            return None
-        try:
-            return self.rule.check(name, value)
-        except InvalidParameterError:
-            raise InvalidParameterError(name, self.describe(), value) from None
-
-
 def _param(default: Any, rule: _Rule, doc: str) -> Any:
     """A dataclass field with its validation rule and a one-line description."""
     return field(default=default, metadata={"rule": rule, "doc": doc})
 
 
-POSITIVE = Interval(0.0, math.inf)
-NON_NEGATIVE = Interval(0.0, math.inf, "left")
-FRACTION = Interval(0.0, 1.0, "both")
-ANGLE = Interval(0.0, 90.0, "both")
 UP_CHOICES = ("z", "-z", "y", "-y", "x", "-x", "auto")
 
 
@@ -592,8 +503,6 @@ class Config:
         InvalidParameterError
             An unknown key or a bad value; the message names the key and the file.
         """
-        from .io._textfile import read_text
-
         return cls.from_yaml_text(read_text(path, "configuration file"), source=str(Path(path)))
 
     @classmethod
@@ -613,8 +522,6 @@ class Config:
         """YAML text of the whole configuration; written atomically to ``path`` if given."""
         text = yaml.dump(self.to_dict(), Dumper=_Dumper, sort_keys=False)
         if path is not None:
-            from .io import atomic_write_text
-
             atomic_write_text(Path(path), text)
         return text
 

@@ -13,8 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import WriteError
-from .io import write_cloud
+from .io import make_folder, write_cloud
 from .io._detections import write_detections
 from .pipeline import Result
 from .render import BoxDrawing, render_scene
@@ -44,11 +43,7 @@ def write_outputs(
     with two fields: ``label`` (index into ``result.class_names``, -1 for none)
     and ``instance`` (detection id, 0 for none).
     """
-    out = Path(out_dir)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise WriteError(out, f"cannot create the output folder ({exc.strerror})") from exc
+    out = make_folder(out_dir, "output folder")
     doc = result.to_dict()
     doc["classes"] = result.class_names
     det_path = write_detections(out / "detections.json", doc)

@@ -13,6 +13,7 @@ import warnings
 
 import typer
 
+from .._version import __version__
 from ..errors import OntoDetectError
 from ._console import err_console, setup_output
 
@@ -29,28 +30,31 @@ app = typer.Typer(
 )
 
 
+def _show_version(value: bool) -> None:
+    if value:
+        typer.echo(f"ontodetect {__version__}")
+        raise typer.Exit()
+
+
 @app.callback()
 def _global_options(
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Print only results and errors."),
     verbose: bool = typer.Option(False, "--verbose", "-v", help="Print more detail."),
+    version: bool = typer.Option(
+        False,
+        "--version",
+        callback=_show_version,
+        is_eager=True,
+        help="Print the version and exit.",
+    ),
 ) -> None:
     setup_output(quiet=quiet, verbose=verbose)
 
 
-def _register_commands() -> None:
-    # Importing a command module registers its command(s) on ``app``; command modules
-    # arrive with the stages they expose.
-    from importlib import import_module
-
-    for name in ("info", "demo", "synth", "segment", "detect", "evaluate", "calibrate", "cad"):
-        try:
-            import_module(f"{__name__}.{name}")
-        except ModuleNotFoundError as exc:
-            if exc.name != f"{__name__}.{name}":
-                raise
-
-
-_register_commands()
+# Importing a command module registers its command(s) on ``app``. The command modules
+# import the library's stages inside the commands, so that building the CLI (--help,
+# --version) imports none of them.
+from . import cad, calibrate, demo, detect, evaluate, info, segment, synth  # noqa: E402, F401
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -3,24 +3,47 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import yaml
 
 from ..config import Config
 from ..errors import InvalidParameterError, ReadError
 from ..io._textfile import read_text
-from ..ontology import Ontology, load_ontology
+
+if TYPE_CHECKING:
+    from ..ontology import Ontology
 
 
-def load_config(config: Path | None, overrides: list[str]) -> Config:
-    """The configuration from ``--config`` (or the defaults) with ``--set`` overrides."""
+#: Options that set one configuration key: option name -> dotted key.
+CONFIG_OPTIONS = {
+    "up": "prepare.up",
+    "scale": "prepare.scale",
+    "threshold": "detect.threshold",
+    "beta": "detect.beta",
+    "context": "detect.context",
+    "votes": "detect.votes",
+}
+
+
+def load_config(config: Path | None, overrides: list[str], **options: Any) -> Config:
+    """The configuration from ``--config`` (or the defaults) with ``--set`` overrides, then
+    the options that set one key (:data:`CONFIG_OPTIONS`; None: not given), checked by the
+    key's own rule."""
     cfg = Config.from_yaml(config) if config is not None else Config()
-    return cfg.with_overrides(overrides) if overrides else cfg
+    cfg = cfg.with_overrides(overrides) if overrides else cfg
+    changes: dict[str, dict[str, Any]] = {}
+    for name, value in options.items():
+        if value is not None:
+            section, key = CONFIG_OPTIONS[name].split(".")
+            changes.setdefault(section, {})[key] = value
+    return cfg.replace(**changes) if changes else cfg
 
 
 def load_ontology_option(files: list[Path], only: bool) -> Ontology:
     """The built-in ontology with ``--ontology`` files merged in (or only them)."""
+    from ..ontology import load_ontology  # lazy: CLI start-up
+
     if only and not files:
         raise InvalidParameterError(
             "--ontology-only", "used with at least one --ontology FILE", "no file"

@@ -4,26 +4,17 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import typer
 from rich.table import Table
 
-from ..cad import (
-    KERNELS,
-    MIN_SCORE,
-    ModelLibrary,
-    builtin_library,
-    cad_dict,
-    fit_document,
-    library_figure,
-    load_manifest,
-    write_object_map,
-)
 from ..errors import InvalidParameterError, WriteError
 from ..io import atomic_write, read_cloud
 from ..io._detections import read_detections, write_detections
 from . import app
 from ._console import console, reporting, state
+from ._defaults import KERNELS, MIN_SCORE
 
 cad_app = typer.Typer(
     name="cad",
@@ -33,9 +24,14 @@ cad_app = typer.Typer(
 )
 app.add_typer(cad_app, name="cad")
 
+if TYPE_CHECKING:
+    from ..cad import ModelLibrary
+
 
 def load_library(manifests: list[Path], only: bool) -> ModelLibrary:
     """The built-in models with ``--models`` manifests merged in (or only theirs)."""
+    from ..cad import ModelLibrary, builtin_library, load_manifest  # lazy: CLI start-up
+
     if only and not manifests:
         raise InvalidParameterError(
             "--models-only", "used with at least one --models FILE", "no file"
@@ -74,6 +70,8 @@ def fit(
     seed: int = typer.Option(0, "--seed", help="Seed of every random step."),
 ) -> None:
     """Fit models to stored detections; write detections.json (with cad) and the object map."""
+    from ..cad import cad_dict, fit_document, write_object_map  # lazy: CLI start-up
+
     lib = load_library(models, models_only)
     doc = read_detections(detections)
     with reporting():
@@ -121,6 +119,8 @@ def models_command(
     ),
 ) -> None:
     """List the model library: name, label, size and where each model comes from."""
+    from ..cad import library_figure  # lazy: CLI start-up
+
     lib = load_library(models, models_only)
     if picture is not None:
         fig = library_figure(lib)

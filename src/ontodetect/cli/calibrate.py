@@ -8,19 +8,18 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
-from ..evaluation import FitSettings, calibrate_dataset
-from ..evaluation._calibrate import (
+from ..io import atomic_write_text
+from ..io._layouts import DATASET_FORMATS
+from . import app
+from ._common import load_config
+from ._console import console, err_console, reporting, state
+from ._defaults import (
     MIN_GAIN_ROOMS,
     MIN_ROOMS,
     ONE_SIDED_QUANTILE,
     PRIOR_SIGMA_SHARE,
     PRIOR_STRENGTH,
 )
-from ..evaluation._dataset import DATASET_FORMATS
-from ..io import atomic_write_text
-from . import app
-from ._console import console, err_console, reporting, state
-from .evaluate import detect_options
 
 
 def _pct(x: float) -> str:
@@ -103,9 +102,14 @@ def calibrate(
     ),
 ) -> None:
     """Estimate each constraint's mean and sigma from labelled objects; check on held-out rooms."""
-    opts = detect_options(
-        config, set_, None, False, room, None, None, up, scale, threshold, None, None, 0
-    )
+    from ..calibrate import FitSettings, calibrate_dataset  # lazy: CLI start-up
+
+    opts: dict = {
+        "config": load_config(config, set_, up=up, scale=scale, threshold=threshold),
+        "seed": 0,
+    }
+    if room is not None:
+        opts["room"] = room
     settings = FitSettings(
         prior_share=sigma_floor,
         quantile=quantile,

@@ -7,9 +7,9 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
-from ..demo import DEMO_ROOM, DEMO_SEED, run_demo
 from . import app
 from ._console import console, reporting
+from ._defaults import DEMO_ROOM, DEMO_SEED
 
 
 @app.command()
@@ -19,6 +19,8 @@ def demo(
     seed: int = typer.Option(DEMO_SEED, "--seed", help="Seed of the simulation and detection."),
 ) -> None:
     """Simulate a furnished room, detect its furniture and compare with the truth (no input)."""
+    from ..demo import run_demo  # lazy: CLI start-up
+
     with reporting():
         d = run_demo(out, room=room, seed=seed)
     table = Table(title=f"simulated {room} (seed {seed}): {len(d.result.detections)} detections")

@@ -10,8 +10,6 @@ from rich.table import Table
 
 from ..cloud import as_position
 from ..io import read_cloud
-from ..outputs import explain, write_outputs
-from ..pipeline import detect as run_detect
 from . import app
 from ._common import load_config, load_ontology_option, number_list, room_option
 from ._console import console, reporting, state
@@ -82,7 +80,19 @@ def detect(
     ),
 ) -> None:
     """Detect objects; write detections.json, labelled.ply and detections.png."""
-    cfg = load_config(config, set_)
+    from ..outputs import write_outputs  # lazy: CLI start-up
+    from ..pipeline import detect as run_detect  # lazy: CLI start-up
+
+    cfg = load_config(
+        config,
+        set_,
+        up=up,
+        scale=scale,
+        threshold=threshold,
+        beta=beta,
+        context=context,
+        votes=votes,
+    )
     onto = load_ontology_option(ontology, ontology_only)
     room_arg = room_option(room, room_probs)
     eye = number_list(viewpoint, float, "--viewpoint")
@@ -96,19 +106,13 @@ def detect(
             ontology=onto,
             room=room_arg,
             indoor=indoor,
-            threshold=threshold,
-            beta=beta,
-            context=context,
-            votes=votes,
             seed=seed,
-            up=up,
-            scale=scale,
             viewpoint=eye,
         )
         object_map = None
         if cad:
-            from ..cad import fit_detections, write_object_map
-            from ..pipeline import with_cad
+            from ..cad import fit_detections, write_object_map  # lazy: CLI start-up
+            from ..pipeline import with_cad  # lazy: CLI start-up
 
             fits = fit_detections(result, seed=seed)
             result = with_cad(result, fits)
@@ -144,6 +148,8 @@ def detect(
 
 
 def _print_explain(result) -> None:
+    from ..outputs import explain  # lazy: CLI start-up
+
     for row in explain(result):
         head = (
             f"cluster {row['cluster']}: {row['num_points']} points, {row['planes']} planes"

@@ -7,49 +7,10 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
-from ..evaluation import evaluate_dataset, write_report
-from ..evaluation._dataset import DATASET_FORMATS
-from ..evaluation._report import CRITERION_NAMES
+from ..io._layouts import DATASET_FORMATS
 from . import app
 from ._common import load_config, load_ontology_option, number_list, room_option
 from ._console import console, reporting, state
-
-
-def detect_options(
-    config: Path | None,
-    set_: list[str],
-    ontology: list[Path] | None,
-    ontology_only: bool,
-    room: str | None,
-    room_probs: Path | None,
-    indoor: float | None,
-    up: str | None,
-    scale: float | None,
-    threshold: float | None,
-    beta: float | None,
-    context: float | None,
-    seed: int,
-    votes: int | None = None,
-) -> dict:
-    """Keyword arguments of ``pipeline.detect`` from the options ``detect`` also has.
-
-    Options left out (None) are not passed: the configuration's ``detect`` section decides.
-    """
-    opts: dict = {"config": load_config(config, set_), "seed": seed}
-    if ontology is not None:
-        opts["ontology"] = load_ontology_option(ontology, ontology_only)
-    given = {
-        "room": room_option(room, room_probs),
-        "indoor": indoor,
-        "up": up,
-        "scale": scale,
-        "threshold": threshold,
-        "beta": beta,
-        "context": context,
-        "votes": votes,
-    }
-    opts.update({k: v for k, v in given.items() if v is not None})
-    return opts
 
 
 def _pct(x: float) -> str:
@@ -134,22 +95,24 @@ def eval_(
     ),
 ) -> None:
     """Evaluate detection on a labelled dataset: P, R, F1, AP per class, confusion, times."""
-    opts = detect_options(
+    from ..evaluation import evaluate_dataset, write_report  # lazy: CLI start-up
+    from ..evaluation._report import CRITERION_NAMES  # lazy: CLI start-up
+
+    cfg = load_config(
         config,
         set_,
-        ontology if ontology or ontology_only else None,
-        ontology_only,
-        room,
-        room_probs,
-        indoor,
-        up,
-        scale,
-        threshold,
-        beta,
-        context,
-        seed,
-        votes,
+        up=up,
+        scale=scale,
+        threshold=threshold,
+        beta=beta,
+        context=context,
+        votes=votes,
     )
+    opts: dict = {"config": cfg, "seed": seed}
+    if ontology or ontology_only:
+        opts["ontology"] = load_ontology_option(ontology, ontology_only)
+    given = {"room": room_option(room, room_probs), "indoor": indoor}
+    opts.update({k: v for k, v in given.items() if v is not None})
     turn_list = number_list(turns, float, "--turns")
     seed_list = number_list(seeds, int, "--seeds")
     if save_detections and out is None:

@@ -9,7 +9,6 @@ import typer
 from rich.table import Table
 
 from ..io import read_cloud, supported_formats
-from ..summary import describe_cloud
 from . import app
 from ._console import console, reporting
 
@@ -23,6 +22,8 @@ def info(
     as_json: bool = typer.Option(False, "--json", help="Print machine-readable JSON."),
 ) -> None:
     """Print number of points, fields, bounds, spacing, and guesses of units and up axis."""
+    from ..summary import describe_cloud  # lazy: CLI start-up
+
     with reporting():
         cloud = read_cloud(path, format=format)
     summary = describe_cloud(cloud)

@@ -4,20 +4,22 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import typer
 from rich.table import Table
 
 from ..io import atomic_write_text, read_cloud, write_cloud
-from ..segment import Segmentation
-from ..segment import segment as run_segment
 from . import app
 from ._common import load_config
 from ._console import console, reporting, state
 
 #: Colour of points in no cluster.
 NONE_COLOR = (160, 160, 160)
+
+if TYPE_CHECKING:
+    from ..segment import Segmentation
 
 
 def cluster_colors(labels: np.ndarray, seed: int = 0) -> np.ndarray:
@@ -73,6 +75,8 @@ def segment(
     seed: int = typer.Option(0, "--seed", help="Seed of every random step."),
 ) -> None:
     """Prepare and cluster a scan; write segments.ply and planes.json and print a summary."""
+    from ..segment import segment as run_segment  # lazy: CLI start-up
+
     cfg = load_config(config, set_)
     with reporting():
         cloud = read_cloud(path, format=format)

@@ -9,10 +9,9 @@ import typer
 import yaml
 
 from ..errors import InvalidParameterError
-from ..synth import SENSORS, room_types, sensor_options, synthesize, synthesize_many, write_synth
-from ..synth.furnished import FURNISHED_ROOM_TYPES, synthesize_furnished
 from . import app
 from ._console import console, reporting
+from ._defaults import SENSORS
 
 _SENSOR_HELP = {
     "rgbd": "Kinect-like RGB-D camera walked around the room, frames fused (world frame)",
@@ -83,6 +82,15 @@ def synth(
 ) -> None:
     """Simulate scans of furnished rooms with per-point ground truth (cloud.ply, objects.json,
     scene.json, mesh.ply)."""
+    from ..synth import (  # lazy: CLI start-up
+        room_types,
+        sensor_options,
+        synthesize,
+        synthesize_many,
+        write_synth,
+    )
+    from ..synth.furnished import FURNISHED_ROOM_TYPES  # lazy: CLI start-up
+
     furnished = furnished or catalog is not None
     if list_:
         kinds = FURNISHED_ROOM_TYPES if furnished else room_types()
@@ -136,6 +144,12 @@ def _synth_furnished(
     options: dict[str, Any],
 ) -> None:
     """Furnished rooms: one scene in OUT, or OUT/scene_0000... with --count."""
+    from ..synth import write_synth  # lazy: CLI start-up
+    from ..synth.furnished import (  # lazy: CLI start-up
+        FURNISHED_ROOM_TYPES,
+        synthesize_furnished,
+    )
+
     for name in rooms:
         if name not in FURNISHED_ROOM_TYPES:
             raise InvalidParameterError("room", f"one of {', '.join(FURNISHED_ROOM_TYPES)}", name)

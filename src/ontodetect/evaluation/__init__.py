@@ -2,38 +2,19 @@
 
 A detection is a true positive when its points overlap an unmatched ground-truth
 instance of the same class with IoU >= 0.25 (0.5 is reported too), matched
-greedily by descending score (DESIGN.md). NYU40 ids map to classes as ScanNet
+greedily by descending score (docs/evaluation.md). NYU40 ids map to classes as ScanNet
 uses them: chair 5, sofa 6, table 7 and desk 14 (counted as table).
 
 - matching and metrics: :func:`match_instances`, :func:`evaluate_scenes`;
 - datasets: :func:`discover_scenes`, :func:`evaluate_scene` (one unit of work),
   :func:`evaluate_dataset` (the map over scenes and the merge);
-- reports: :func:`write_report` (report.md, report.json, pr_curves.png, confusion.png);
-- calibration: :func:`calibrate_dataset`, :func:`split_scenes`, :func:`calibrate_ontology`.
+- reports: :func:`write_report` (report.md, report.json, pr_curves.png, confusion.png).
+
+Calibration, which uses these, is its own stage: :mod:`ontodetect.calibrate`.
 """
 
 from __future__ import annotations
 
-from ._calibrate import (
-    CalibrationResult,
-    ConstraintFit,
-    FitSettings,
-    GroupDecision,
-    SceneSamples,
-    SceneSplit,
-    ValidationScene,
-    best_kind,
-    calibrate_dataset,
-    calibrate_ontology,
-    collect_scene_samples,
-    constraint_group,
-    constraint_values,
-    fit_constraints,
-    fit_gaussian,
-    select_groups,
-    split_scenes,
-    validation_rooms,
-)
 from ._dataset import (
     CRITERIA,
     DATASET_FORMATS,
@@ -77,13 +58,9 @@ __all__ = [
     "DATASET_FORMATS",
     "DISTANCE_THRESHOLDS",
     "NYU40_CLASSES",
-    "CalibrationResult",
     "ClassMetrics",
-    "ConstraintFit",
     "DatasetEvaluation",
     "Evaluation",
-    "FitSettings",
-    "GroupDecision",
     "Instance",
     "LoadedScene",
     "MatchResult",
@@ -91,24 +68,13 @@ __all__ = [
     "SceneError",
     "SceneOutcome",
     "SceneResult",
-    "SceneSamples",
     "SceneSource",
-    "SceneSplit",
-    "ValidationScene",
     "average_precision",
-    "best_kind",
-    "calibrate_dataset",
-    "calibrate_ontology",
-    "collect_scene_samples",
-    "constraint_group",
-    "constraint_values",
     "discover_scenes",
     "evaluate_dataset",
     "evaluate_scene",
     "evaluate_scenes",
     "evaluation_classes",
-    "fit_constraints",
-    "fit_gaussian",
     "instances_from_labels",
     "literature_comparisons",
     "load_scene",
@@ -119,11 +85,8 @@ __all__ = [
     "precision_recall_curve",
     "read_scene_detections",
     "scene_group",
-    "select_groups",
-    "split_scenes",
     "summarize_outcomes",
     "turn_cloud",
-    "validation_rooms",
     "variant_name",
     "write_report",
 ]

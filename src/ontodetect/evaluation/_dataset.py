@@ -15,16 +15,16 @@ Each scene is an independent unit of work: :func:`evaluate_scene` reads it, runs
 :class:`SceneOutcome`; :func:`summarize_outcomes` merges the outcomes in scene order into a
 :class:`DatasetEvaluation`. :func:`evaluate_dataset` is that map and merge, run in worker
 processes with ``jobs > 1``; any other engine that maps a function over a list can run it
-the same way (DESIGN.md, "Scale").
+the same way (docs/architecture.md, "Scale").
 """
 
 from __future__ import annotations
 
 import dataclasses
 import functools
+import inspect
 import math
 import os
-import re
 import time
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -36,15 +36,27 @@ import numpy as np
 
 from .._parallel import cpu_count, pool_context
 from .._progress import progress
-from .._transforms import yaw_pose
 from ..cloud import PointCloud, sensor_position
+from ..config import COUNT, Config, Interval, check_param
 from ..errors import (
     CorruptFileError,
     InvalidParameterError,
     OntoDetectError,
-    ReadError,
-    UnsupportedFormatError,
 )
+from ..geometry import yaw_pose
+from ..io import make_folder, read_cloud
+from ..io._detections import read_detections, write_detections
+from ..io._labels import NYU40_NAMES
+from ..io._layouts import (
+    DATASET_FORMATS,
+    SceneSource,
+    discover_scenes,
+    scene_group,
+)
+from ..ontology import builtin_ontology
+from ..pipeline import detect
+from ..synth import load_synth
+from ..synth.scene import CLASS_IDS
 from ._match import Instance, instances_from_labels
 from ._metrics import Evaluation, SceneResult, evaluate_scenes
 
@@ -69,11 +81,8 @@ __all__ = [
     "variant_name",
 ]
 
-#: Dataset layouts :func:`discover_scenes` knows ("auto" guesses per folder).
-DATASET_FORMATS = ("auto", "ontodetect", "scannet", "scannet-votenet", "s3dis")
 #: Other names accepted for a layout.
-FORMAT_ALIASES = {"synth": "ontodetect", "votenet": "scannet-votenet"}
-#: The three ways a detection is scored: key -> (criterion, IoU threshold). DESIGN.md:
+#: The three ways a detection is scored: key -> (criterion, IoU threshold) (docs/evaluation.md):
 #: point IoU >= 0.25 counts, 0.5 is reported too; the centre distance of Günther et al.
 CRITERIA: dict[str, tuple[str, float]] = {
     "iou@0.25": ("iou", 0.25),
@@ -82,14 +91,8 @@ CRITERIA: dict[str, tuple[str, float]] = {
 }
 #: The criterion reports lead with.
 PRIMARY = "iou@0.25"
-#: Folder levels below the dataset folder searched for scenes (dataset / area / room).
-MAX_DEPTH = 2
 #: Format tag of the JSON form of a dataset evaluation.
 EVALUATION_FORMAT = "ontodetect.evaluation/1"
-
-_VOTENET_SUFFIX = "_vert.npy"
-_SCANNET_MESH = "_vh_clean_2.ply"
-_SCAN_ID = re.compile(r"(scene\d{4})_\d{2}")
 
 
 class SceneError(OntoDetectError):
@@ -104,154 +107,9 @@ class SceneError(OntoDetectError):
         return (SceneError, (self.scene, self.problem))
 
 
-# -- discovery -----------------------------------------------------------------------------
-@dataclass(frozen=True)
-class SceneSource:
-    """Where one scene of a dataset is and how to read it.
-
-    Attributes
-    ----------
-    name : str
-        Unique within the dataset: the scan id (``scene0000_00``) or the folder's path
-        relative to the dataset folder (``scene_0003``, ``Area_1/office_2``). Stored
-        detections are looked up as ``<detections dir>/<name>/detections.json``.
-    path : str
-        The scene folder, or the ``*_vert.npy`` file of a VoteNet scan.
-    format : str
-        ``ontodetect``, ``scannet``, ``scannet-votenet`` or ``s3dis``.
-    group : str
-        Scans of the same space share a group (rescans ``scene0000_00``/``_01`` are
-        group ``scene0000``); calibration keeps a group on one side of a split.
-    """
-
-    name: str
-    path: str
-    format: str
-    group: str
-
-
-def scene_group(name: str) -> str:
-    """The room a scan belongs to: ScanNet rescans of one space share it.
-
-    Examples
-    --------
-    >>> scene_group("scene0000_02"), scene_group("val/scene0011_01"), scene_group("office_1")
-    ('scene0000', 'val/scene0011', 'office_1')
-    """
-    m = _SCAN_ID.search(name)
-    if m is None:
-        return name
-    return name[: m.start()] + m.group(1)
-
-
-def _natural_key(text: str) -> list[Any]:
-    # office_2 before office_10
-    return [int(t) if t.isdigit() else t for t in re.split(r"(\d+)", text)]
-
-
-def _folder_layout(folder: Path) -> str | None:
-    """The layout of a folder that holds exactly one scene, or None."""
-    if (folder / "scene.json").is_file() and (folder / "cloud.ply").is_file():
-        return "ontodetect"
-    if (folder / "Annotations").is_dir():
-        return "s3dis"
-    if any(folder.glob(f"*{_SCANNET_MESH}")):
-        return "scannet"
-    return None
-
-
-def _normalise_format(fmt: str) -> str:
-    name = FORMAT_ALIASES.get(str(fmt).lower(), str(fmt).lower())
-    if name not in DATASET_FORMATS:
-        raise InvalidParameterError("format", f"one of {', '.join(DATASET_FORMATS)}", fmt)
-    return name
-
-
-def _scenes_in(folder: Path, root: Path, fmt: str, depth: int) -> list[SceneSource]:
-    rel = folder.relative_to(root).as_posix()
-    layout = _folder_layout(folder)
-    if layout is not None and fmt in ("auto", layout):
-        name = folder.name if rel == "." else rel
-        return [SceneSource(name, str(folder), layout, scene_group(name))]
-    out = []
-    if fmt in ("auto", "scannet-votenet"):
-        prefix = "" if rel == "." else f"{rel}/"
-        for vert in folder.glob(f"*{_VOTENET_SUFFIX}"):
-            name = prefix + vert.name[: -len(_VOTENET_SUFFIX)]
-            out.append(SceneSource(name, str(vert), "scannet-votenet", scene_group(name)))
-    if depth < MAX_DEPTH:
-        for sub in folder.iterdir():
-            if sub.is_dir() and not sub.name.startswith((".", "__")):
-                out += _scenes_in(sub, root, fmt, depth + 1)
-    return out
-
-
-def discover_scenes(path: str | os.PathLike[str], format: str = "auto") -> list[SceneSource]:
-    """Find the scenes of a dataset folder (or the one scene a path is).
-
-    Parameters
-    ----------
-    path : str or PathLike
-        A dataset folder, a scene folder, or a scene's file (``*_vert.npy``,
-        ``*_vh_clean_2.ply``, a synthetic scene's ``cloud.ply``).
-    format : {"auto", "ontodetect", "scannet", "scannet-votenet", "s3dis"}
-        Layout to look for; "auto" recognises each folder by its files. Folders are
-        searched up to two levels deep (dataset / area / room).
-
-    Returns
-    -------
-    list of SceneSource
-        In natural order of their names (``office_2`` before ``office_10``).
-
-    Raises
-    ------
-    ReadError
-        The path does not exist or holds no scene of the layout asked for.
-
-    Examples
-    --------
-    >>> import tempfile, pathlib, numpy as np
-    >>> d = pathlib.Path(tempfile.mkdtemp())
-    >>> for s in ("scene0001_00", "scene0001_01"):
-    ...     np.save(d / f"{s}_vert.npy", np.zeros((1, 6), np.float32))
-    >>> [(s.name, s.format, s.group) for s in discover_scenes(d)]
-    [('scene0001_00', 'scannet-votenet', 'scene0001'), ('scene0001_01', 'scannet-votenet', 'scene0001')]
-    """  # noqa: E501
-    fmt = _normalise_format(format)
-    p = Path(path)
-    if not p.exists():
-        raise ReadError(p, "no such file or folder")
-    if p.is_file():
-        name = p.name
-        for suffix in (_VOTENET_SUFFIX, "_sem_label.npy", "_ins_label.npy"):
-            if name.endswith(suffix) and fmt in ("auto", "scannet-votenet"):
-                scene = name[: -len(suffix)]
-                vert = p.with_name(scene + _VOTENET_SUFFIX)
-                return [SceneSource(scene, str(vert), "scannet-votenet", scene_group(scene))]
-        layout = _folder_layout(p.parent)
-        if layout is not None and fmt in ("auto", layout):
-            return [SceneSource(p.parent.name, str(p.parent), layout, scene_group(p.parent.name))]
-        raise UnsupportedFormatError(
-            p, "is not a scene of a known dataset layout", list(DATASET_FORMATS[1:])
-        )
-    found = _scenes_in(p, p, fmt, 0)
-    if not found:
-        what = "any known layout" if fmt == "auto" else f"the {fmt!r} layout"
-        raise ReadError(
-            p,
-            f"holds no scene of {what} (looked for synthetic scenes with scene.json + "
-            f"cloud.ply, *{_VOTENET_SUFFIX}, *{_SCANNET_MESH} and S3DIS Annotations/ "
-            f"up to {MAX_DEPTH} folders deep)",
-        )
-    return sorted(found, key=lambda s: _natural_key(s.name))
-
-
 # -- loading -------------------------------------------------------------------------------
 def _class_id_lists(ontology: Any, *, reported_only: bool, attr: str) -> dict[int, list[str]]:
     """Ground-truth class id -> every class (``attr`` of it) that matches it, in file order."""
-    from ..io._labels import NYU40_NAMES
-    from ..synth.scene import CLASS_IDS
-
     ids = {name: cid for name, cid in CLASS_IDS.items() if cid > 0}
     ids.update({name: cid for cid, name in NYU40_NAMES.items() if cid > 0})
     out: dict[int, list[str]] = {}
@@ -286,8 +144,6 @@ def evaluation_classes(ontology: Any = None) -> dict[int, str]:
     {5: 'chair', 6: 'sofa', 7: 'table', 14: 'table'}
     """
     if ontology is None:
-        from ..ontology import builtin_ontology
-
         ontology = builtin_ontology()
     return _class_ids(ontology, reported_only=True, attr="label")
 
@@ -308,12 +164,8 @@ class LoadedScene:
 
 def read_scene_cloud(source: SceneSource) -> PointCloud:
     """The scene's points with per-point ``instance`` and ``class_id`` fields."""
-    from ..io import read_cloud
-
     path = Path(source.path)
     if source.format == "ontodetect":
-        from ..synth import load_synth
-
         cloud, _, _ = load_synth(path)
     else:
         cloud = read_cloud(path, format=source.format)
@@ -387,8 +239,6 @@ def read_scene_detections(
     num_points : int, optional
         Rows of the scene's input file; a document written for another scan is refused.
     """
-    from ..io._detections import read_detections
-
     path = Path(detections_dir) / scene / "detections.json"
     doc = read_detections(path)
     if num_points is not None and doc["num_points"] != num_points:
@@ -479,10 +329,6 @@ class SceneOutcome:
 
 @functools.cache
 def _detect_keys() -> tuple[str, ...]:
-    import inspect
-
-    from ..pipeline import detect
-
     return tuple(p for p in inspect.signature(detect).parameters if p != "cloud")
 
 
@@ -532,8 +378,7 @@ def evaluate_scene(
         Name of the outcome and of its folder under ``save_dir`` (default: the scene's).
     """
     opts = _check_detect_options(detect_options)
-    if isinstance(turn, bool) or not isinstance(turn, (int, float)) or not math.isfinite(turn):
-        raise InvalidParameterError("turn", "a finite angle in degrees", turn)
+    check_param("turn", Interval(), turn)  # degrees, any finite angle
     if turn and detections_dir is not None:
         raise InvalidParameterError(
             "turn", "0 when scoring stored detections (they were made on the scan as it is)", turn
@@ -549,8 +394,6 @@ def evaluate_scene(
             load = time.perf_counter() - t0
             seconds, timings = 0.0, {}
         else:
-            from ..pipeline import detect
-
             load = time.perf_counter() - t0
             t1 = time.perf_counter()
             result = detect(scene.cloud, **opts)
@@ -627,13 +470,7 @@ def _check_variants(name: str, values: Sequence[Any] | None, kind: type) -> list
 
 
 def _save_detections(result: Any, folder: Path) -> None:
-    from ..errors import WriteError
-    from ..io._detections import write_detections
-
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise WriteError(folder, f"cannot create the folder ({exc.strerror})") from exc
+    make_folder(folder)
     doc = result.to_dict()
     doc["classes"] = result.class_names
     write_detections(folder / "detections.json", doc)
@@ -645,9 +482,7 @@ R = TypeVar("R")
 
 
 def _check_jobs(jobs: int) -> int:
-    if isinstance(jobs, bool) or not isinstance(jobs, (int, np.integer)) or jobs < 0:
-        raise InvalidParameterError("jobs", "a non-negative integer (0: one per CPU)", jobs)
-    return int(jobs) or cpu_count()
+    return check_param("jobs", COUNT, jobs) or cpu_count()  # 0: one per CPU
 
 
 def map_scenes(
@@ -717,7 +552,7 @@ class DatasetEvaluation:
 
     @property
     def primary(self) -> Evaluation:
-        """The evaluation at point IoU >= 0.25 (DESIGN.md)."""
+        """The evaluation at point IoU >= 0.25, the main criterion (docs/evaluation.md)."""
         return self.evaluations[PRIMARY]
 
     def scene_seconds(self) -> dict[str, float]:
@@ -813,8 +648,6 @@ def describe_options(
     out: dict[str, Any] = {}
     for key, value in options.items():
         if key == "config":
-            from ..config import Config
-
             default = Config().to_dict()
             changed = {
                 f"{sec}.{k}": _jsonable_option(v)

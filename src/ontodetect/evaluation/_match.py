@@ -1,4 +1,4 @@
-"""Matching detections to ground-truth instances (DESIGN.md, "Ground truth and scoring").
+"""Matching detections to ground-truth instances (docs/evaluation.md, "How a detection is scored").
 
 A detection is a true positive when its point set overlaps an unmatched
 ground-truth instance of the same class with IoU >= the threshold; detections
@@ -14,7 +14,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..config import SHARE, check_param
 from ..errors import InvalidParameterError
+from ..geometry import point_overlap
 
 __all__ = [
     "DISTANCE_THRESHOLDS",
@@ -123,29 +125,9 @@ def instances_from_labels(
 def overlap_matrix(
     preds: Sequence[Instance], gts: Sequence[Instance]
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
-    """(p, g) IoU and intersection counts between every detection and ground-truth instance."""
-    iou = np.zeros((len(preds), len(gts)))
-    inter = np.zeros((len(preds), len(gts)), dtype=np.int64)
-    if not preds or not gts:
-        return iou, inter
-    all_gt = np.concatenate([g.points for g in gts])
-    owner = np.concatenate([np.full(len(g.points), k) for k, g in enumerate(gts)])
-    order = np.argsort(all_gt, kind="stable")
-    all_gt, owner = all_gt[order], owner[order]
-    gt_sizes = np.array([len(g.points) for g in gts])
-    for i, p in enumerate(preds):
-        lo = np.searchsorted(all_gt, p.points, "left")
-        hi = np.searchsorted(all_gt, p.points, "right")
-        hits = hi > lo
-        if not hits.any():
-            continue
-        # Ground-truth instances may share points only in malformed data; count each hit.
-        idx = np.concatenate([np.arange(a, b) for a, b in zip(lo[hits], hi[hits])])
-        counts = np.bincount(owner[idx], minlength=len(gts))
-        inter[i] = counts
-        union = len(p.points) + gt_sizes - counts
-        iou[i] = np.where(union > 0, counts / np.maximum(union, 1), 0.0)
-    return iou, inter
+    """(p, g) IoU and intersection counts between every detection and ground-truth instance
+    (:func:`ontodetect.geometry.point_overlap` of their points)."""
+    return point_overlap([p.points for p in preds], [g.points for g in gts])
 
 
 @dataclass(frozen=True)
@@ -189,7 +171,7 @@ def match_instances(
     preds, gts : sequences of Instance
         Detections and ground-truth instances.
     criterion : {"iou", "distance"}
-        Point-set IoU >= ``iou_threshold`` (DESIGN.md), or centre distance within
+        Point-set IoU >= ``iou_threshold`` (docs/evaluation.md), or centre distance within
         the class's threshold (Günther et al.).
     class_agnostic : bool
         Match regardless of class (for the confusion matrix).
@@ -204,8 +186,7 @@ def match_instances(
     """
     if criterion not in ("iou", "distance"):
         raise InvalidParameterError("criterion", "'iou' or 'distance'", criterion)
-    if not 0.0 < iou_threshold <= 1.0:
-        raise InvalidParameterError("iou_threshold", "a number in (0, 1]", iou_threshold)
+    check_param("iou_threshold", SHARE, iou_threshold)
     thresholds = {**DISTANCE_THRESHOLDS, **(distance_thresholds or {})}
     iou, _ = overlap_matrix(preds, gts)
     pred_match = np.full(len(preds), -1, dtype=np.int64)

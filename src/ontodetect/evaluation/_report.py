@@ -26,7 +26,7 @@ import numpy as np
 import yaml
 
 from ..errors import CorruptFileError, WriteError
-from ..io import atomic_write_bytes, atomic_write_text
+from ..io import atomic_write_bytes, atomic_write_text, make_folder
 from ._dataset import CRITERIA, PRIMARY, DatasetEvaluation
 from ._match import DISTANCE_THRESHOLDS
 from ._metrics import ClassMetrics, Evaluation
@@ -489,11 +489,7 @@ def write_report(evaluation: DatasetEvaluation, out_dir: str | os.PathLike[str])
     -------
     ReportFiles
     """
-    out = Path(out_dir)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise WriteError(out, f"cannot create the report folder ({exc.strerror})") from exc
+    out = make_folder(out_dir, "report folder")
     for key in CRITERIA:
         if key not in evaluation.evaluations:
             raise WriteError(out, f"the evaluation lacks the {key!r} criterion")

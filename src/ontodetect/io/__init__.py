@@ -23,9 +23,19 @@ from typing import Any
 
 from ..cloud import PointCloud
 from ..errors import ReadError, UnsupportedFormatError, WriteError
-from ._atomic import atomic_write, atomic_write_bytes, atomic_write_text
+from ._atomic import atomic_write, atomic_write_bytes, atomic_write_text, make_folder
+from ._detections import (
+    DETECTIONS_FORMAT,
+    detections_schema,
+    read_detections,
+    validate_detections,
+    write_detections,
+)
+from ._layouts import DATASET_FORMATS
 
 __all__ = [
+    "DATASET_FORMATS",
+    "DETECTIONS_FORMAT",
     "FORMATS",
     "READERS",
     "WRITERS",
@@ -34,9 +44,14 @@ __all__ = [
     "atomic_write_bytes",
     "atomic_write_text",
     "detect_format",
+    "detections_schema",
+    "make_folder",
     "read_cloud",
+    "read_detections",
     "supported_formats",
+    "validate_detections",
     "write_cloud",
+    "write_detections",
 ]
 
 

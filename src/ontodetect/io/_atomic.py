@@ -11,7 +11,25 @@ from typing import IO
 
 from ..errors import WriteError
 
-__all__ = ["atomic_write", "atomic_write_bytes", "atomic_write_text"]
+__all__ = ["atomic_write", "atomic_write_bytes", "atomic_write_text", "make_folder"]
+
+
+def make_folder(path: str | os.PathLike[str], what: str = "folder") -> Path:
+    """Create the folder ``path`` (and its parents) if needed; a failure is a WriteError
+    that names the folder as ``what`` ("output folder", "report folder"...).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> make_folder(pathlib.Path(tempfile.mkdtemp()) / "a" / "b").is_dir()
+    True
+    """
+    out = Path(path)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise WriteError(out, f"cannot create the {what} ({exc.strerror})") from exc
+    return out
 
 
 @contextlib.contextmanager

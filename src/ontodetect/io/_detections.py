@@ -1,47 +1,55 @@
 """``detections.json``: the contract between ontodetect and whoever uses its results.
 
-The layout is fixed in DESIGN.md (format ``ontodetect.detections/1``); extra keys
-are allowed, the listed ones keep their meaning. :func:`read_detections` checks
-every listed key so that evaluation of stored results fails with a clear message
-instead of a wrong score.
+The layout is documented key by key in docs/detections-format.md (format
+``ontodetect.detections/1``), with a JSON Schema shipped in the package
+(:func:`detections_schema`); extra keys are allowed, the listed ones keep their
+meaning. :func:`read_detections` checks every required key so that evaluation of
+stored results fails with a clear message instead of a wrong score.
 """
 
 from __future__ import annotations
 
 import json
-import math
 import os
+from importlib import resources
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from ..errors import CorruptFileError
+from ..geometry import jsonable
 from ._atomic import atomic_write_text
 from ._textfile import read_text
 
-__all__ = ["DETECTIONS_FORMAT", "read_detections", "validate_detections", "write_detections"]
+__all__ = [
+    "DETECTIONS_FORMAT",
+    "detections_schema",
+    "read_detections",
+    "validate_detections",
+    "write_detections",
+]
 
+#: Format tag of detections.json, the one definition (``pipeline.Result.to_dict`` uses it).
 DETECTIONS_FORMAT = "ontodetect.detections/1"
 
 
-def _jsonable(value: Any) -> Any:
-    if isinstance(value, dict):
-        return {str(k): _jsonable(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return _jsonable(value.tolist())
-    if isinstance(value, np.generic):
-        return _jsonable(value.item())
-    if isinstance(value, float):
-        return value if math.isfinite(value) else None
-    return value
+def detections_schema() -> dict[str, Any]:
+    """The JSON Schema (draft 2020-12) of ``detections.json``, shipped in the package.
+
+    A fresh dictionary on every call. Validate with any JSON Schema library, e.g.
+    ``jsonschema.validate(doc, detections_schema())``.
+
+    Examples
+    --------
+    >>> detections_schema()["properties"]["format"]["const"] == DETECTIONS_FORMAT
+    True
+    """
+    text = resources.files("ontodetect").joinpath("data/detections.schema.json").read_text("utf-8")
+    return json.loads(text)
 
 
 def write_detections(path: str | os.PathLike[str], document: dict[str, Any]) -> Path:
     """Validate and write a detections document atomically (compact point lists, indented rest)."""
-    doc = _jsonable(document)
+    doc = jsonable(document)
     validate_detections(doc, str(path))
     # Index lists go on one line each: readable, and a tenth of the size of one number a line.
     marked = {

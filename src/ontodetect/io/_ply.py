@@ -35,6 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._progress import progress
+from .._rules import ON_NONFINITE, check_param
 from ..cloud import RESERVED_FIELDS, PointCloud, point_cloud
 from ..errors import CorruptFileError, InvalidParameterError, ReadError, WriteError
 from ._atomic import atomic_write
@@ -56,7 +57,6 @@ FLOAT32_MAX = float(np.finfo(np.float32).max)
 #: Suffix given to a property whose name the cloud reserves for itself.
 RENAMED_SUFFIX = "_field"
 
-_ON_NONFINITE = ("warn", "drop", "raise")
 
 # PLY type names (both spellings) -> NumPy type codes without byte order.
 _PLY_TYPES = {
@@ -167,9 +167,7 @@ def plan_columns(
 
 def check_on_nonfinite(value: str) -> str:
     """Validate the ``on_nonfinite`` reader option."""
-    if value not in _ON_NONFINITE:
-        raise InvalidParameterError("on_nonfinite", "one of 'warn', 'drop', 'raise'", value)
-    return value
+    return check_param("on_nonfinite", ON_NONFINITE, value)
 
 
 def _frozen(a: NDArray[Any]) -> NDArray[Any]:

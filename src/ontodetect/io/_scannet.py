@@ -31,8 +31,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .._rules import ON_NONFINITE, check_param
 from ..cloud import PointCloud, point_cloud
-from ..errors import CorruptFileError, InvalidParameterError, ReadError
+from ..errors import CorruptFileError, ReadError
+from . import read_cloud  # the PLY reader goes through the registry
 from ._labels import UNANNOTATED, nyu40_name, read_scannet_label_map
 from ._text import _to_colors
 
@@ -188,8 +190,6 @@ def read_scannet(
     CorruptFileError
         A JSON file is damaged or its lengths disagree with the mesh.
     """
-    from . import read_cloud  # the PLY reader goes through the registry
-
     path = Path(path)
     mesh, scene = _scene_files(path)
     folder = mesh.parent
@@ -477,8 +477,7 @@ def read_scannet_votenet(
             )
         with np.errstate(invalid="ignore"):
             meta["boxes"] = boxes.astype(np.float64).tolist()
-    if on_nonfinite not in ("warn", "drop", "raise"):
-        raise InvalidParameterError("on_nonfinite", "one of 'warn', 'drop', 'raise'", on_nonfinite)
+    check_param("on_nonfinite", ON_NONFINITE, on_nonfinite)
     return point_cloud(
         vert[:, :3],
         rgb=rgb,

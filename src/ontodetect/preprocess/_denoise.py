@@ -9,11 +9,13 @@ surface stays dense whatever the sensor's resolution.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial import cKDTree
 
-from ..errors import InvalidParameterError
+from ..config import POSITIVE, Interval, OneOf, check_param
+from ..geometry import as_points
 from ._voxel import voxelize
 
 __all__ = [
@@ -30,13 +32,6 @@ DENOISE_METHODS = ("statistical", "radius", "both", "none")
 SOR_MEDIAN_FLOOR = 2.0
 #: Percentiles of the far-outlier box come from at most about this many points.
 PERCENTILE_SAMPLE = 200_000
-
-
-def _as_points(points: ArrayLike) -> NDArray[np.float64]:
-    pts = np.asarray(points, dtype=np.float64)
-    if pts.ndim != 2 or pts.shape[1] != 3:
-        raise InvalidParameterError("points", "an array of shape (n, 3)", f"shape {pts.shape}")
-    return pts
 
 
 def statistical_outlier_mask(
@@ -71,11 +66,11 @@ def statistical_outlier_mask(
     >>> bool(keep[-1]), int(keep.sum())
     (False, 100)
     """
-    pts = _as_points(points)
-    if int(neighbors) < 1:
-        raise InvalidParameterError("neighbors", "an int in the range [1, inf)", neighbors)
-    if not std_ratio > 0:
-        raise InvalidParameterError("std_ratio", "a float in the range (0, inf)", std_ratio)
+    from scipy.spatial import cKDTree  # heavy: imported when used (start-up)
+
+    pts = as_points(points)
+    check_param("neighbors", Interval(1, math.inf, "left", integer=True), neighbors)
+    check_param("std_ratio", POSITIVE, std_ratio)
     n = len(pts)
     k = min(int(neighbors), n - 1)
     if k < 1:
@@ -96,9 +91,10 @@ def radius_outlier_mask(
     >>> radius_outlier_mask([[0, 0, 0], [0.01, 0, 0], [0, 0.01, 0], [1, 1, 1]], 0.05).tolist()
     [True, True, True, False]
     """
-    pts = _as_points(points)
-    if not radius > 0:
-        raise InvalidParameterError("radius", "a float in the range (0, inf)", radius)
+    from scipy.spatial import cKDTree  # heavy: imported when used (start-up)
+
+    pts = as_points(points)
+    check_param("radius", POSITIVE, radius)
     if len(pts) == 0:
         return np.ones(0, dtype=bool)
     counts = cKDTree(pts).query_ball_point(pts, radius, return_length=True, workers=-1)
@@ -122,9 +118,8 @@ def far_outlier_mask(
     >>> bool(far_outlier_mask(pts, 0.5, 1.0)[-1])
     False
     """
-    pts = _as_points(points)
-    if not 0 <= percentile < 50:
-        raise InvalidParameterError("percentile", "a float in the range [0, 50)", percentile)
+    pts = as_points(points)
+    check_param("percentile", Interval(0.0, 50.0, "left"), percentile)
     if len(pts) == 0:
         return np.ones(0, dtype=bool)
     # Percentiles of an even thinning are as good and cost a fraction on big clouds.
@@ -177,11 +172,8 @@ def denoise(
     >>> bool(keep[-1]), int(keep[:-1].sum())
     (False, 5000)
     """
-    pts = _as_points(points)
-    if method not in DENOISE_METHODS:
-        raise InvalidParameterError(
-            "method", "one of " + ", ".join(map(repr, DENOISE_METHODS)), method
-        )
+    pts = as_points(points)
+    check_param("method", OneOf(DENOISE_METHODS), method)
     keep = (
         far_outlier_mask(pts, far_percentile, far_margin)
         if np.isfinite(far_margin)

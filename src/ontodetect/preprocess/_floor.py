@@ -13,7 +13,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy import ndimage
 
 from ._gravity import CellPlanes
 
@@ -60,6 +59,8 @@ class FloorMap:
         >>> m.height([[0.5, 0.3], [5.0, 0.0]]).round(3).tolist()
         [0.1, 0.2]
         """
+        from scipy import ndimage  # heavy: imported when used (start-up)
+
         p = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
         coords = ((p - self.origin) / self.tile).T
         return ndimage.map_coordinates(self.heights, coords, order=1, mode="nearest")
@@ -105,6 +106,8 @@ def floor_height_map(cells: CellPlanes, *, tile: float = 0.5, max_warp: float = 
     >>> round(float(fm.height([[3.0, 2.0]])[0]), 2)
     0.15
     """
+    from scipy import ndimage  # heavy: imported when used (start-up)
+
     ok = cells.planar & (np.abs(cells.normals[:, 2]) > np.cos(np.radians(HORIZONTAL_TOLERANCE)))
     ok &= np.abs(cells.centers[:, 2]) <= max_warp
     ctr = cells.centers

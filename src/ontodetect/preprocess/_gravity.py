@@ -17,6 +17,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..cloud import DataWarning
 from ..errors import InvalidParameterError
+from ..geometry import level_transform, rotation_between, unit_direction
 from ._voxel import grouped_covariance, voxelize
 
 __all__ = [
@@ -109,21 +110,13 @@ class FloorFit:
     found: bool
 
 
-def _unit(v: ArrayLike) -> NDArray[np.float64]:
-    a = np.asarray(v, dtype=np.float64).reshape(3)
-    n = float(np.linalg.norm(a))
-    if not np.isfinite(n) or n == 0:
-        raise InvalidParameterError("up", "a non-zero 3-vector or an axis name", v)
-    return a / n
-
-
 def as_direction(up: str | ArrayLike) -> NDArray[np.float64]:
     """A unit vector from an axis name (``"z"``, ``"-y"``...) or a 3-vector."""
     if isinstance(up, str):
         if up not in AXES:
             raise InvalidParameterError("up", "one of " + ", ".join(map(repr, AXES)), up)
         return np.array(AXES[up])
-    return _unit(up)
+    return unit_direction(up)
 
 
 def cell_planes(points: ArrayLike, cell: float = 0.1) -> CellPlanes:
@@ -343,7 +336,7 @@ def find_floor(
         ``normal`` points up; ``found`` is False for the fallback.
     """
     pts = np.asarray(points, dtype=np.float64)
-    u = _unit(up)
+    u = unit_direction(up)
     cells = cells if cells is not None else cell_planes(pts, cell)
     nrm = cells.normals[cells.planar]
     ctr = cells.centers[cells.planar]
@@ -427,49 +420,3 @@ def _lowest_level(pts, normal, normals, centers, counts, cell, min_area):
             members = horiz & (np.abs(h_all - level) <= (half + 1) * LEVEL_BIN)
             return FloorFit(normal, level, float(smooth[b]), True), members
     return None, None
-
-
-def rotation_between(a: ArrayLike, b: ArrayLike) -> NDArray[np.float64]:
-    """The smallest rotation (3, 3) taking unit direction ``a`` onto ``b``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> R = rotation_between([0, -1, 0], [0, 0, 1])
-    >>> np.round(R @ [0, -1, 0], 6).tolist()
-    [0.0, 0.0, 1.0]
-    """
-    u, v = _unit(a), _unit(b)
-    c = float(u @ v)
-    w = np.cross(u, v)
-    s = float(np.linalg.norm(w))
-    if s < 1e-12:
-        if c > 0:
-            return np.eye(3)
-        # Half turn about any axis perpendicular to u.
-        p = np.eye(3)[int(np.argmin(np.abs(u)))]
-        k = np.cross(u, p)
-        k /= np.linalg.norm(k)
-        return 2.0 * np.outer(k, k) - np.eye(3)
-    k = w / s
-    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
-    return np.eye(3) + s * K + (1 - c) * (K @ K)
-
-
-def level_transform(up: ArrayLike, floor_offset: float, scale: float = 1.0) -> NDArray[np.float64]:
-    """4x4 transform: scale, rotate ``up`` onto +z, and put the floor at z = 0.
-
-    ``floor_offset`` is the floor height along ``up`` in the scaled frame.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> T = level_transform([0, -1, 0], -1.5)  # a camera frame, floor 1.5 m below
-    >>> np.round(T @ [0, 1.5, 2, 1], 6).tolist()  # a floor point 2 m ahead
-    [0.0, 2.0, 0.0, 1.0]
-    """
-    R = rotation_between(up, (0.0, 0.0, 1.0))
-    T = np.eye(4)
-    T[:3, :3] = R * scale
-    T[2, 3] = -floor_offset
-    return T

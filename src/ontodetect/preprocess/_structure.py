@@ -11,7 +11,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import ndimage
 
 from ._gravity import CellPlanes, window_sum
 
@@ -123,6 +122,8 @@ def _walls(
     min_height: float,
     band: float,
 ) -> list[StructurePlane]:
+    from scipy import ndimage  # heavy: imported when used (start-up)
+
     nrm, ctr = cells.normals[cells.planar], cells.centers[cells.planar]
     vert = np.abs(nrm[:, 2]) < np.sin(np.radians(VERTICAL_TOLERANCE))
     nrm, ctr = nrm[vert], ctr[vert]

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.spatial import cKDTree
 
-from ..errors import InvalidParameterError
+from ..config import Interval, check_param
+from ..geometry import as_points
 
 __all__ = ["estimate_normals", "graph_normals", "smooth_surface"]
 
@@ -20,6 +21,8 @@ BLOCK = 200_000
 
 def _local_frames(pts: NDArray[np.float64], neighbors: int):
     """Per point: neighbourhood mean, eigenvalues (ascending) and eigenvectors."""
+    from scipy.spatial import cKDTree  # heavy: imported when used (start-up)
+
     n = len(pts)
     k = min(int(neighbors), n)
     tree = cKDTree(pts)
@@ -66,11 +69,8 @@ def estimate_normals(
     >>> bool(np.allclose(n, [0, 0, 1])), bool(v.max() < 1e-9)
     (True, True)
     """
-    pts = np.asarray(points, dtype=np.float64)
-    if pts.ndim != 2 or pts.shape[1] != 3:
-        raise InvalidParameterError("points", "an array of shape (n, 3)", f"shape {pts.shape}")
-    if int(neighbors) < 3:
-        raise InvalidParameterError("neighbors", "an int in the range [3, inf)", neighbors)
+    pts = as_points(points)
+    check_param("neighbors", Interval(3, math.inf, "left", integer=True), neighbors)
     if len(pts) < 3:
         return np.tile([0.0, 0.0, 1.0], (len(pts), 1)), np.zeros(len(pts))
     _, evals, evecs = _local_frames(pts, neighbors)

@@ -7,7 +7,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..config import POSITIVE, check_param
 from ..errors import InvalidParameterError
+from ..geometry import as_points
 
 __all__ = ["VoxelGrid", "grouped_covariance", "voxel_keys", "voxelize"]
 
@@ -163,11 +165,8 @@ def voxelize(
     >>> g.centers[0].tolist()
     [0.002, 0.0, 0.0]
     """
-    pts = np.asarray(points, dtype=np.float64)
-    if pts.ndim != 2 or pts.shape[1] != 3:
-        raise InvalidParameterError("points", "an array of shape (n, 3)", f"shape {pts.shape}")
-    if not size > 0:
-        raise InvalidParameterError("size", "a float in the range (0, inf)", size)
+    pts = as_points(points)
+    check_param("size", POSITIVE, size)
     n = len(pts)
     use = np.ones(n, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
     if use.shape != (n,):

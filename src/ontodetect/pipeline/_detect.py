@@ -1,0 +1,231 @@
+"""The whole method in one call: read → prepare → segment → score → label (→ vote).
+
+:func:`detect` takes a :class:`~ontodetect.cloud.PointCloud` and returns a
+:class:`~ontodetect.pipeline.Result` holding the detections (in the input file's frame
+and units, with the input file's point rows), every cluster's scores for ``--explain``,
+and the intermediate results.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import threading
+import time
+import warnings
+from collections.abc import Mapping, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .._parallel import cpu_count, fork_context
+from .._progress import progress, use_reporter
+from ..cloud import DataWarning, PointCloud, as_position, pixel_grid, sensor_position
+from ..config import COUNT, Config, Nullable, check_param
+from ..errors import InvalidParameterError
+from ..labeling import LabelChoice, label_clusters
+from ..ontology import ClusterScores, Ontology, builtin_ontology, class_priors, score_cluster
+from ..preprocess import Ground, find_ground, smooth_depth
+from ..segment import Segmentation, segment
+from ..segment._measure import describe_clusters
+from ._result import Detection, Result, _detection
+from ._vote import PassCluster, _vote, vote_turns
+
+__all__ = ["detect"]
+
+
+@dataclass(frozen=True)
+class _PassInputs:
+    """What every pass shares besides the scan and its configuration."""
+
+    ontology: Ontology
+    priors: Mapping[str, float]
+    seed: int
+    viewpoint: NDArray[np.float64] | None = None
+    ground: Ground | None = None
+
+
+def detect(
+    cloud: PointCloud,
+    *,
+    config: Config | None = None,
+    ontology: Ontology | None = None,
+    room: str | Mapping[str, float] | None = None,
+    indoor: float | None = None,
+    jobs: int | None = None,
+    seed: int = 0,
+    viewpoint: Sequence[float] | None = None,
+) -> Result:
+    """Find the objects an ontology describes in a point cloud.
+
+    Parameters
+    ----------
+    cloud : PointCloud
+        The scan (any units and up direction the preparation can handle).
+    config : Config, optional
+        Parameters of every stage (defaults: Table 4.1): among them the decision
+        threshold, the energy's β, the likelihood of "none", the seat-near-table term
+        and the vote (``detect.*``), the up axis and the scale factor (``prepare.up``,
+        ``prepare.scale``). Change single values with :meth:`Config.replace` or
+        :meth:`Config.with_overrides`, e.g.
+        ``Config().with_overrides(["detect.votes=1", "prepare.up=auto"])``.
+    ontology : Ontology, optional
+        Classes to look for; the built-in furniture ontology by default.
+    room : str or mapping, optional
+        Room category or distribution for the environment prior (Eq. 3.10).
+    indoor : float, optional
+        P(indoor) for the indoor/outdoor prior (Eq. 3.5).
+    jobs : int, optional
+        Worker processes (forked) for the passes after the first (``detect.votes``),
+        while this process makes the first; 1: all in this process; 0: one per usable
+        CPU, as for :func:`ontodetect.evaluation.evaluate_dataset`. By default one per
+        CPU where the platform can fork, if this process runs no other thread (a number
+        given here forks anyway). The result does not depend on it.
+    seed : int
+        Seed of every random step.
+    viewpoint : (3,) float, optional
+        Where the sensor stood, in the cloud's frame and units, when the cloud is one
+        view (a single camera frame): a part the object itself hides from there, such
+        as a seat behind its backrest, counts as occluded rather than absent. By
+        default :func:`ontodetect.cloud.sensor_position` (an organized cloud's
+        viewpoint); none for a fused scan.
+
+    Returns
+    -------
+    Result
+
+    Examples
+    --------
+    >>> from ontodetect.synth import synthesize
+    >>> result = detect(synthesize("tiny", seed=1).cloud)
+    >>> sorted(d.label for d in result.detections)
+    ['chair', 'table']
+    """
+    if not isinstance(cloud, PointCloud):
+        raise InvalidParameterError("cloud", "a PointCloud", type(cloud).__name__)
+    config = config or Config()
+    d = config.detect
+    if viewpoint is not None:
+        cloud = cloud.with_meta(sensor_position=as_position(viewpoint).tolist())
+    eye = sensor_position(cloud)
+    if eye is not None and pixel_grid(cloud) is None:
+        warnings.warn(
+            "a viewpoint but no pixel grid: if this is a depth camera's frame, its "
+            "depth steps stay unsmoothed and read as flat parts (give the organized "
+            "frame, such as its PCD)",
+            DataWarning,
+            stacklevel=2,
+        )
+    ontology = ontology or builtin_ontology()
+    priors = class_priors(ontology, room, indoor)
+    passes = d.votes if len(cloud) <= d.vote_max_points else 1
+    turned = [
+        config.replace(prepare={"turn": (config.prepare.turn + t + 180.0) % 360.0 - 180.0})
+        for t in vote_turns(passes, d.vote_turn)
+    ]
+    workers = _vote_workers(jobs, len(turned))
+    t0 = time.perf_counter()
+    # A frame's depth steps, its scale, voxels, up direction and floor do not depend on the
+    # pass's turn: find them once for all passes (counted in "segment", where preparation
+    # would have found them).
+    scan = smooth_depth(cloud) if config.prepare.depth_smoothing else cloud
+    shared = _PassInputs(ontology, priors, seed, eye, find_ground(scan, config) if turned else None)
+    before = time.perf_counter() - t0
+    if workers:
+        with ProcessPoolExecutor(max_workers=workers, mp_context=fork_context()) as pool:
+            futures = [pool.submit(_pass_clusters, scan, c, shared) for c in turned]
+            seg, scores, choices, found, timings = _one_pass(scan, config, shared)
+            others = [f.result() for f in futures]
+    else:
+        seg, scores, choices, found, timings = _one_pass(scan, config, shared)
+        others = [_pass_clusters(scan, c, shared) for c in turned]
+    timings["segment"] += before
+    if turned:
+        found, choices = _vote(cloud, seg, scores, choices, found, others, ontology)
+        timings["votes"] = time.perf_counter() - t0 - sum(timings.values())
+    found.sort(key=lambda d: (-d.score, d.cluster))
+    detections = [Detection(**{**d.__dict__, "id": i + 1}) for i, d in enumerate(found)]
+    return Result(
+        cloud=cloud,
+        detections=detections,
+        segmentation=seg,
+        scores=scores,
+        choices=choices,
+        ontology=ontology,
+        priors=priors,
+        timings=timings,
+    )
+
+
+def _vote_workers(jobs: int | None, passes: int) -> int:
+    """Worker processes for ``passes`` extra passes (0: make them in this process)."""
+    jobs = check_param("jobs", Nullable(COUNT), jobs)
+    if not passes or fork_context() is None or multiprocessing.current_process().daemon:
+        return 0  # a daemonic worker (multiprocessing.Pool) may not have children
+    if jobs is None:
+        # Forking copies only the calling thread: with other threads about (a GUI, a
+        # robot's node), whatever they hold stays held in the copy. Then, unless the
+        # caller asks for workers, the passes run here.
+        if threading.active_count() > 1:
+            return 0
+        jobs = 0
+    jobs = jobs or cpu_count()
+    return min(passes, jobs) if jobs > 1 else 0
+
+
+def _pass_clusters(cloud: PointCloud, config: Config, shared: _PassInputs) -> list[PassCluster]:
+    """Every cluster of one pass, as the vote needs it (a unit of work for a worker)."""
+    with use_reporter(None):  # a forked worker must not draw the parent's progress bars
+        seg, scores, choices, _, _ = _one_pass(cloud, config, shared, found=False)
+    return [
+        (np.sort(cloud.index[c.point_indices]), dict(s.probabilities), ch.label)
+        for c, s, ch in zip(seg, scores, choices)
+    ]
+
+
+def _one_pass(
+    cloud: PointCloud,
+    config: Config,
+    shared: _PassInputs,
+    *,
+    found: bool = True,
+) -> tuple[Segmentation, list[ClusterScores], list[LabelChoice], list[Detection], dict[str, float]]:
+    """Segment, score and label once; detections (when ``found``) numbered 0, in cluster
+    order."""
+    d, ontology = config.detect, shared.ontology
+    timings: dict[str, float] = {}
+    t0 = time.perf_counter()
+    seg = segment(cloud, config, seed=shared.seed, ground=shared.ground)
+    timings["segment"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    scores: list[ClusterScores] = []
+    with progress("Scoring clusters", total=len(seg)) as advance:
+        for desc in describe_clusters(seg, shared.viewpoint):
+            scores.append(
+                score_cluster(desc, ontology, shared.priors, none_likelihood=d.none_likelihood)
+            )
+            advance(1)
+    timings["score"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    centers = np.array([c.box.center for c in seg]) if len(seg) else np.zeros((0, 3))
+    choices = label_clusters(
+        scores,
+        [c.planes for c in seg],
+        ontology,
+        beta=d.beta,
+        threshold=d.threshold,
+        centers=centers,
+        context=d.context,
+    )
+    timings["label"] = time.perf_counter() - t0
+    detections = [
+        _detection(
+            cloud, seg, k, scores[k], choice.label, choice.extra["class"], choice.costs, ontology
+        )
+        for k, choice in enumerate(choices)
+        if found and choice.label is not None
+    ]
+    return seg, scores, choices, detections, timings

@@ -1,0 +1,621 @@
+"""Preparation of a whole scan: :func:`prepare`, :func:`find_ground`, the scale factor
+and :class:`PreparedScene` (the levelled scan every later stage works on)."""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from .._progress import progress
+from ..cloud import PointCloud, point_cloud
+from ..config import Config
+from ..errors import InvalidParameterError
+from ..geometry import LevelFrame, yaw_pose
+from ._denoise import denoise, far_outlier_mask
+from ._depth import smooth_depth
+from ._floor import FloorMap, floor_height_map
+from ._gravity import (
+    CellPlanes,
+    FloorFit,
+    as_direction,
+    cell_planes,
+    estimate_up,
+    find_floor,
+    level_transform,
+)
+from ._structure import StructurePlane, find_structure
+from ._surface import smooth_surface
+from ._units import estimate_spacing, guess_units
+from ._voxel import VoxelGrid, voxelize
+
+__all__ = [
+    "CAMERA_MAX_TILT",
+    "CELL_PER_SPACING",
+    "DENOISE_GRID_FACTOR",
+    "FLAT_FLOOR",
+    "FULL_CELL_PERCENTILE",
+    "IDENTITY_TOLERANCE",
+    "LEVEL_MIN_ANGLE",
+    "MILLIMETRE",
+    "MIN_SURFACE_CELLS",
+    "SPACING_SAMPLE",
+    "SURFACE_CELL",
+    "Ground",
+    "PreparedScene",
+    "find_ground",
+    "guess_scale",
+    "prepare",
+    "scale_from_travel",
+    "surface_spacing",
+]
+
+#: Scale applied to clouds whose size says millimetres.
+MILLIMETRE = 1e-3
+#: Voxel centres sampled to estimate the sampling spacing.
+SPACING_SAMPLE = 20_000
+#: A rotation closer to the identity than this (Frobenius norm) is no rotation: the grid
+#: computed before levelling is reused.
+IDENTITY_TOLERANCE = 1e-12
+#: Cells of the coarse plane fits hold about this many sampling spacings a side, so that
+#: sparse scans still get a few points per cell.
+CELL_PER_SPACING = 5.0
+#: Outliers are sought on a grid this many times coarser than the voxels: a speck of noise
+#: is as isolated there, and the neighbour search costs a quarter.
+DENOISE_GRID_FACTOR = 2.0
+#: A floor within this angle (deg) of the given up axis is taken as level: a rotation that
+#: small moves nothing by more than a few millimetres and would cost a second voxel grid.
+LEVEL_MIN_ANGLE = 0.2
+#: A floor height map flatter than this (m) is dropped: the floor is a plane.
+FLAT_FLOOR = 0.01
+#: Cell (m) on which the surface per voxel is measured, and how many planar cells that takes.
+SURFACE_CELL = 0.2
+MIN_SURFACE_CELLS = 20
+#: Planar cells this full (percentile of voxel counts) count as completely covered; edge
+#: cells of a surface are partly empty.
+FULL_CELL_PERCENTILE = 90.0
+#: Largest angle (deg) between a camera frame's -y axis and up that ``up="auto"`` considers.
+CAMERA_MAX_TILT = 60.0
+
+
+def scale_from_travel(encoder_distance: float, slam_distance: float) -> float:
+    """Scale ``k_s = D_e / D_s`` of a monocular SLAM map (thesis §3.2).
+
+    Parameters
+    ----------
+    encoder_distance : float
+        Distance travelled according to the wheel encoders (metres), ``D_e``.
+    slam_distance : float
+        The same distance in the SLAM map's units, ``D_s``.
+
+    Examples
+    --------
+    >>> scale_from_travel(4.0, 2.0)
+    2.0
+    """
+    for name, v in (("encoder_distance", encoder_distance), ("slam_distance", slam_distance)):
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not (v > 0 and np.isfinite(v)):
+            raise InvalidParameterError(name, "a float in the range (0, inf)", v)
+    return float(encoder_distance) / float(slam_distance)
+
+
+def guess_scale(points: ArrayLike) -> float:
+    """1.0 for clouds in metres, 0.001 for clouds whose size says millimetres.
+
+    Examples
+    --------
+    >>> guess_scale([[0, 0, 0], [5000.0, 4000.0, 2500.0]])
+    0.001
+    """
+    return MILLIMETRE if guess_units(np.asarray(points, dtype=np.float64)) == "millimetres" else 1.0
+
+
+@dataclass(frozen=True, eq=False)
+class PreparedScene:
+    """A scan ready for object search: levelled, denoised, voxelized, structure found.
+
+    Attributes
+    ----------
+    cloud : PointCloud
+        Every input point (same order and count as the input), in the levelled
+        frame: metres, z up, z = height above the floor (see ``floor_map``).
+    to_level : (4, 4) float
+        Input frame -> levelled frame (includes the scale); a bent floor adds a
+        smooth vertical correction (``floor_map``), which :meth:`level` and
+        :meth:`from_level` apply.
+    scale : float
+        ``k_s`` of thesis §3.2.
+    up : (3,) float
+        Up direction in the input frame.
+    floor_z : float
+        Floor height along ``up`` in the input frame and units: the floor is
+        ``{x : up · x = floor_z}``.
+    floor_found : bool
+        False when no floor was visible and the lowest points stood in for it.
+    inliers : (n,) bool
+        Points kept by denoising.
+    voxels : VoxelGrid
+        Grid average of the inliers in the levelled frame; ``voxels.point_to_voxel``
+        is -1 for outliers.
+    structure_label : (m,) int8
+        Per voxel: 0 none, 1 floor, 2 wall, 3 ceiling (:data:`STRUCTURE_LABELS`).
+    object_mask : (m,) bool
+        Voxels where objects are searched: not structure and below the cut-off.
+    structure_planes : list of StructurePlane
+        Floor, walls and ceiling in the levelled frame.
+    spacing : float
+        Sampling spacing of the voxel cloud (m): the side of the square of surface
+        one voxel stands for (:func:`surface_spacing`), at least the voxel size.
+    config : Config
+        The configuration used.
+    floor_map : FloorMap or None
+        Height of a bent floor above its plane; levelled z is height above it.
+    info : dict
+        How the scale was chosen, confidence of the up estimate, and other facts.
+    """
+
+    cloud: PointCloud
+    to_level: NDArray[np.float64]
+    scale: float
+    up: NDArray[np.float64]
+    floor_z: float
+    floor_found: bool
+    inliers: NDArray[np.bool_]
+    voxels: VoxelGrid
+    structure_label: NDArray[np.int8]
+    object_mask: NDArray[np.bool_]
+    structure_planes: list[StructurePlane]
+    spacing: float
+    config: Config
+    floor_map: FloorMap | None = None
+    info: dict[str, Any] = field(default_factory=dict)
+
+    # -- voxel arrays --------------------------------------------------------------------
+    @property
+    def centers(self) -> NDArray[np.float64]:
+        """(m, 3) float: voxel centres (grid average) in the levelled frame."""
+        return self.voxels.centers
+
+    @property
+    def colors(self) -> NDArray[np.uint8] | None:
+        """(m, 3) uint8 or None: mean colour per voxel."""
+        return self.voxels.colors
+
+    @property
+    def counts(self) -> NDArray[np.int64]:
+        """(m,) int: input points per voxel."""
+        return self.voxels.counts
+
+    @property
+    def point_to_voxel(self) -> NDArray[np.int64]:
+        """(n,) int: voxel of every input point, -1 for outliers."""
+        return self.voxels.point_to_voxel
+
+    @property
+    def is_structure(self) -> NDArray[np.bool_]:
+        """(m,) bool: floor, wall or ceiling voxels."""
+        return self.structure_label > 0
+
+    @property
+    def num_points(self) -> int:
+        return len(self.cloud)
+
+    # -- mapping back --------------------------------------------------------------------
+    def points_of(self, voxels: ArrayLike) -> NDArray[np.int64]:
+        """Indices of the input points in the given voxels (indices or a mask)."""
+        return self.voxels.points_of(voxels)
+
+    @property
+    def frame(self) -> LevelFrame:
+        """The map between the input's frame and the levelled frame."""
+        return LevelFrame(self.to_level, self.floor_map)
+
+    def from_level(self, points: ArrayLike) -> NDArray[np.float64]:
+        """(k, 3) levelled coordinates back to the input frame and units."""
+        return self.frame.from_level(points)
+
+    def level(self, points: ArrayLike) -> NDArray[np.float64]:
+        """(k, 3) input-frame coordinates into the levelled frame."""
+        return self.frame.level(points)
+
+    def summary(self) -> dict[str, Any]:
+        """JSON-ready facts about the preparation."""
+        return {
+            "num_points": self.num_points,
+            "num_inliers": int(self.inliers.sum()),
+            "num_voxels": len(self.voxels),
+            "num_object_voxels": int(self.object_mask.sum()),
+            "voxel_size": self.voxels.size,
+            "spacing": self.spacing,
+            "scale": self.scale,
+            "up": [float(v) for v in self.up],
+            "floor_z": self.floor_z,
+            "floor_found": self.floor_found,
+            "to_level": self.to_level.tolist(),
+            "structure": [p.to_dict() for p in self.structure_planes],
+            **self.info,
+        }
+
+
+def surface_spacing(centers: ArrayLike, voxel_size: float) -> float:
+    """Side of the square of surface one voxel stands for (m): the scene's sampling spacing.
+
+    On well-covered planar patches of a coarse grid, ``cell² / voxels per cell``
+    is the surface per voxel. Nearest-neighbour distances underestimate it on
+    unevenly sampled scans (mesh vertices crowd at edges and leave flat parts
+    bare), and it is what turns surfaces (m²) into voxel counts. Never less than
+    the voxel size; the median nearest-neighbour distance when too few planar
+    cells exist.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> g = np.stack(np.meshgrid(np.arange(100), np.arange(100), [0]), -1).reshape(-1, 3)
+    >>> s = surface_spacing(g * 0.04, 0.02)  # a grid of 4 cm: about 4 cm
+    >>> bool(0.035 < s < 0.045)
+    True
+    """
+    c = np.asarray(centers, dtype=np.float64)
+    if len(c) < 2:
+        return float(voxel_size)
+    cells = cell_planes(c, SURFACE_CELL)
+    counts = cells.counts[cells.planar]
+    if len(counts) >= MIN_SURFACE_CELLS:
+        full = float(np.percentile(counts, FULL_CELL_PERCENTILE))
+        est = SURFACE_CELL / np.sqrt(full)
+    else:
+        sample = c[:: max(1, len(c) // SPACING_SAMPLE)]
+        est = estimate_spacing(c, sample=len(sample))
+    return float(max(voxel_size, est))
+
+
+class _Clock:
+    """Seconds spent in each step, for people tuning parameters on big scans."""
+
+    def __init__(self) -> None:
+        self.laps: dict[str, float] = {}
+        self._t = time.perf_counter()
+
+    def lap(self, name: str) -> None:
+        now = time.perf_counter()
+        self.laps[name] = round(now - self._t, 4)
+        self._t = now
+
+
+def _choose_scale(xyz, cfg, scale, travelled) -> tuple[float, str]:
+    if scale is not None:
+        if isinstance(scale, bool) or not isinstance(scale, (int, float)) or not scale > 0:
+            raise InvalidParameterError("scale", "a float in the range (0, inf)", scale)
+        return float(scale), "given"
+    if travelled is not None:
+        try:
+            d_e, d_s = travelled
+        except (TypeError, ValueError):
+            raise InvalidParameterError(
+                "travelled", "a pair (encoder distance, SLAM distance)", travelled
+            ) from None
+        return scale_from_travel(d_e, d_s), "travelled"
+    if cfg.scale is not None:
+        return float(cfg.scale), "config"
+    if cfg.guess_units and len(xyz):
+        k = guess_scale(xyz)
+        return k, "units" if k != 1.0 else "default"
+    return 1.0, "default"
+
+
+def _up_hint(cloud: PointCloud) -> tuple[str, float | None]:
+    # An organized cloud (width x height) is a camera frame: y down, z forward, and a
+    # camera is pitched or rolled but not turned on its side.
+    height = cloud.meta.get("height")
+    if isinstance(height, (int, np.integer)) and height > 1:
+        return "-y", CAMERA_MAX_TILT
+    return "z", None
+
+
+@dataclass(frozen=True)
+class Ground:
+    """What preparation finds before it turns the scan (:func:`find_ground`): the scale,
+    the denoised voxels in the input frame, the up direction and the floor plane.
+
+    Attributes
+    ----------
+    num_points : int
+        Points of the cloud it was found in.
+    scale, scale_source : float, str
+        ``k_s`` and how it was chosen.
+    voxels : VoxelGrid
+        Denoised voxels of the scaled input.
+    inliers : (n,) bool
+        Points that kept a voxel.
+    spacing, cell : float
+        Sampling spacing (:func:`surface_spacing`) and structure cell size (m).
+    up_confidence : float
+        Confidence of an estimated up direction (1 when given).
+    cells : CellPlanes
+        Plane fits of the input-frame cells.
+    floor : FloorFit
+        The floor plane (its normal is the up direction).
+    laps : dict
+        Seconds per step.
+    """
+
+    num_points: int
+    scale: float
+    scale_source: str
+    voxels: VoxelGrid
+    inliers: NDArray[np.bool_]
+    spacing: float
+    cell: float
+    up_confidence: float
+    cells: CellPlanes
+    floor: FloorFit
+    laps: dict[str, float] = field(default_factory=dict)
+
+
+def find_ground(
+    cloud: PointCloud,
+    config: Config | None = None,
+    *,
+    scale: float | None = None,
+    travelled: tuple[float, float] | None = None,
+    up: str | ArrayLike | None = None,
+) -> Ground:
+    """Scale, denoise and voxelize a scan and find its up direction and floor: the steps
+    of :func:`prepare` that do not depend on ``prepare.turn`` (parameters as there; a
+    frame's depth steps are expected smoothed already)."""
+    cfg = (config or Config()).prepare
+    xyz = cloud.xyz
+    n = len(xyz)
+    if n == 0:
+        raise InvalidParameterError("cloud", "a cloud with at least one point", "0 points")
+    clock = _Clock()
+    k_s, scale_source = _choose_scale(xyz, cfg, scale, travelled)
+    scaled = xyz * k_s if k_s != 1.0 else xyz
+
+    colors = cloud.rgb
+    with progress("Voxelizing and denoising", total=None):
+        # Far outliers first (they would stretch the grid), then neighbourhood statistics
+        # on the voxel centres, on a grid twice as coarse: every point inherits its
+        # voxel's verdict, so the cost does not grow with the sensor's density.
+        far = (
+            far_outlier_mask(scaled, cfg.far_percentile, cfg.far_margin)
+            if np.isfinite(cfg.far_margin)
+            else np.ones(n, dtype=bool)
+        )
+        if not far.any():
+            raise InvalidParameterError(
+                "cloud", "a cloud that keeps points after denoising", f"all {n} points removed"
+            )
+        grid = voxelize(scaled, cfg.voxel_size, colors, mask=far)
+        keep = denoise(
+            grid.centers,
+            voxel_size=DENOISE_GRID_FACTOR * cfg.voxel_size,
+            method=cfg.denoise,
+            neighbors=cfg.sor_neighbors,
+            std_ratio=cfg.sor_std_ratio,
+            radius=cfg.ror_radius,
+            min_neighbors=cfg.ror_min_neighbors,
+            far_margin=np.inf,
+        )
+        if not keep.any():
+            raise InvalidParameterError(
+                "cloud", "a cloud that keeps points after denoising", f"all {n} points removed"
+            )
+        grid = grid.subset(keep)
+    inliers = grid.point_to_voxel >= 0
+
+    clock.lap("voxels_and_denoise")
+
+    # -- gravity and ground ------------------------------------------------------------
+    spacing = surface_spacing(grid.centers, cfg.voxel_size)
+    cell = max(cfg.structure_cell, CELL_PER_SPACING * spacing)
+    up_choice = cfg.up if up is None else up
+    confidence = 1.0
+    if isinstance(up_choice, str) and up_choice == "auto":
+        hint, max_angle = _up_hint(cloud)
+        u, confidence = estimate_up(grid.centers, hint=hint, cell=cell, max_angle=max_angle)
+    else:
+        u = as_direction(up_choice)
+    cells = cell_planes(grid.centers, cell)
+    floor = find_floor(
+        grid.centers,
+        u,
+        cell=cell,
+        min_area=cfg.min_floor_area,
+        cells=cells,
+        refine=cfg.level_on_floor,
+    )
+    if (
+        floor.found
+        and np.degrees(np.arccos(min(1.0, abs(float(floor.normal @ u))))) < LEVEL_MIN_ANGLE
+    ):
+        floor = FloorFit(u, floor.offset, floor.area, floor.found)
+    clock.lap("ground")
+    return Ground(
+        n,
+        k_s,
+        scale_source,
+        grid,
+        inliers,
+        float(spacing),
+        float(cell),
+        float(confidence),
+        cells,
+        floor,
+        dict(clock.laps),
+    )
+
+
+def prepare(
+    cloud: PointCloud | ArrayLike,
+    config: Config | None = None,
+    *,
+    scale: float | None = None,
+    travelled: tuple[float, float] | None = None,
+    up: str | ArrayLike | None = None,
+    seed: int | None = 0,
+    ground: Ground | None = None,
+) -> PreparedScene:
+    """Scale, denoise, level, voxelize and find the structure of a scan.
+
+    Parameters
+    ----------
+    cloud : PointCloud or (n, 3) float
+        The scan.
+    config : Config, optional
+        ``config.prepare`` drives this step; defaults from Table 4.1.
+    scale : float, optional
+        Scale factor ``k_s``; overrides ``travelled``, the configuration and the
+        units guess.
+    travelled : (float, float), optional
+        Distances travelled according to odometry and to the SLAM map, giving
+        ``k_s = D_e / D_s``.
+    up : str or (3,) float, optional
+        Up direction of the input: ``"z"``, ``"-y"``..., a vector, or ``"auto"``
+        to estimate it (hint: ``-y`` for organized camera frames, ``z`` otherwise).
+        Defaults to ``config.prepare.up``.
+    seed : int, optional
+        Accepted for a uniform signature; preparation has no random step.
+    ground : Ground, optional
+        This cloud's :func:`find_ground` with the same configuration (``scale``,
+        ``travelled`` and ``up`` are then not used): passes over one scan that differ
+        only in ``prepare.turn`` share it.
+
+    Returns
+    -------
+    PreparedScene
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> floor = np.c_[rng.random((4000, 2)) * 3, np.full(4000, 0.7)]
+    >>> box = np.c_[rng.random((800, 2)) * 0.4 + 1, rng.random(800) * 0.5 + 0.7]
+    >>> scene = prepare(np.vstack([floor, box]))
+    >>> round(scene.floor_z, 3), int(scene.object_mask.sum()) > 0
+    (0.7, True)
+    """
+    del seed  # deterministic: no random step
+    cfg = (config or Config()).prepare
+    if not isinstance(cloud, PointCloud):
+        cloud = point_cloud(cloud)
+    if cfg.depth_smoothing:
+        cloud = smooth_depth(cloud)  # only a single organized frame with its sensor changes
+    xyz = cloud.xyz
+    n = len(xyz)
+    if ground is None:
+        ground = find_ground(cloud, config, scale=scale, travelled=travelled, up=up)
+    elif ground.num_points != n:
+        raise InvalidParameterError(
+            "ground", f"the ground of this cloud ({n} points)", f"{ground.num_points} points"
+        )
+    clock = _Clock()
+    clock.laps.update(ground.laps)
+    k_s, scale_source, colors = ground.scale, ground.scale_source, cloud.rgb
+    grid, inliers, spacing, cell = ground.voxels, ground.inliers, ground.spacing, ground.cell
+    confidence, cells, floor = ground.up_confidence, ground.cells, ground.floor
+    to_level = level_transform(floor.normal, floor.offset, k_s)
+    if cfg.turn:
+        to_level = yaw_pose(0.0, 0.0, math.radians(cfg.turn)) @ to_level
+    R = to_level[:3, :3] / k_s
+    shift = to_level[:3, 3]
+    rotated = float(np.linalg.norm(R - np.eye(3))) > IDENTITY_TOLERANCE
+    levelled_xyz = xyz @ to_level[:3, :3].T + shift
+    # Plane fits of the levelled scene: the same cells shifted when only translated.
+    if rotated:
+        cells = cell_planes(grid.centers @ R.T + shift, cell)
+    else:
+        cells = CellPlanes(
+            cells.centers + shift, cells.normals, cells.counts, cells.planar, cells.cell
+        )
+    floor_map = None
+    if cfg.floor_tile > 0 and cfg.max_floor_warp > 0 and floor.found:
+        floor_map = floor_height_map(cells, tile=cfg.floor_tile, max_warp=cfg.max_floor_warp)
+        if floor_map.warp < FLAT_FLOOR:
+            floor_map = None
+    if floor_map is not None:
+        levelled_xyz[:, 2] -= floor_map.height(levelled_xyz[:, :2])
+        cc = cells.centers.copy()
+        cc[:, 2] -= floor_map.height(cc[:, :2])
+        cells = CellPlanes(cc, cells.normals, cells.counts, cells.planar, cells.cell)
+    if rotated or floor_map is not None:
+        # Voxels of the final frame, so that every point lies in the voxel it maps to.
+        grid = voxelize(levelled_xyz, cfg.voxel_size, colors, mask=inliers)
+    else:
+        # A translation moves the grid with the points: the same voxels, shifted.
+        grid = VoxelGrid(
+            grid.size,
+            grid.origin + shift,
+            grid.keys,
+            grid.centers + shift,
+            grid.colors,
+            grid.counts,
+            grid.point_to_voxel,
+        )
+    if cfg.smoothing:
+        grid = VoxelGrid(
+            grid.size,
+            grid.origin,
+            grid.keys,
+            smooth_surface(grid.centers),
+            grid.colors,
+            grid.counts,
+            grid.point_to_voxel,
+        )
+        cells = None
+    clock.lap("level")
+    normals = None if cloud.normals is None else cloud.normals @ R.T
+    levelled = cloud.replace(xyz=levelled_xyz, normals=normals)
+
+    clock.lap("levelled_cloud")
+
+    # -- structure and the search volume -------------------------------------------------
+    centers = grid.centers
+    if cfg.structure:
+        lcells = cells if cells is not None else cell_planes(centers, cell)
+        labels, planes = find_structure(
+            centers,
+            lcells,
+            floor_band=cfg.floor_band,
+            ceiling_above=cfg.altitude_cutoff,
+            min_floor_area=cfg.min_floor_area,
+            min_wall_length=cfg.min_wall_length,
+            min_wall_height=cfg.min_wall_height,
+            wall_band=cfg.wall_band,
+            floor_area=floor.area,
+        )
+    else:
+        labels = np.zeros(len(grid), dtype=np.int8)
+        planes = []
+    object_mask = (labels == 0) & (centers[:, 2] <= cfg.altitude_cutoff)
+    if not cfg.structure:
+        object_mask &= centers[:, 2] >= cfg.floor_band
+    clock.lap("structure")
+    return PreparedScene(
+        cloud=levelled,
+        to_level=to_level,
+        scale=k_s,
+        up=floor.normal.copy(),
+        floor_z=float(floor.offset / k_s),
+        floor_found=floor.found,
+        inliers=inliers,
+        voxels=grid,
+        structure_label=labels,
+        object_mask=object_mask,
+        structure_planes=planes,
+        spacing=float(spacing),
+        config=config or Config(),
+        floor_map=floor_map,
+        info={
+            "scale_source": scale_source,
+            "up_confidence": float(confidence),
+            "floor_area": float(floor.area),
+            "cell": float(cell),
+            "floor_warp": 0.0 if floor_map is None else floor_map.warp,
+            "timings": clock.laps,
+        },
+    )

@@ -1,0 +1,222 @@
+"""Scene measurements the ontology's scoring needs beyond a cluster's own planes: what
+stands beside a cluster (:func:`shelter_heights`), what it hides from a single view
+(:func:`hidden_heights`) and whether the floor shows under its tops (:func:`open_below`);
+:func:`describe_clusters` gathers them into the scoring's input.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..geometry import box_footprint
+from ..ontology import ClusterDescription
+from ..ontology._score import HORIZONTAL_TILT
+from ..preprocess._structure import FLOOR
+from ._segmentation import Cluster, Segmentation
+
+__all__ = [
+    "FLOOR_CELL",
+    "OPEN_BELOW_HEIGHT",
+    "OPEN_BELOW_RIM",
+    "SELF_SHADOW",
+    "SELF_SHADOW_DISTANCE",
+    "SHELTER_AREA",
+    "SHELTER_GAP",
+    "describe_cluster",
+    "describe_clusters",
+    "hidden_heights",
+    "open_below",
+    "shelter_heights",
+]
+
+
+def describe_cluster(
+    cluster: Cluster,
+    shelter: float = -math.inf,
+    ceiling: float = math.inf,
+    hidden_below: float = -math.inf,
+    open_below: Sequence[float] | None = None,
+) -> ClusterDescription:
+    """What the ontology scoring needs to know about a cluster (``shelter``: see
+    :func:`shelter_heights`; ``ceiling``: the top of the search volume;
+    ``hidden_below``: see :func:`hidden_heights`; ``open_below``: see
+    :func:`open_below`)."""
+    return ClusterDescription(
+        planes=cluster.planes,
+        relations=cluster.relations_by_pair,
+        length=cluster.length,
+        breadth=cluster.breadth,
+        height=cluster.height,
+        bottom=cluster.bottom,
+        shelter=shelter,
+        ceiling=ceiling,
+        hidden_below=hidden_below,
+        open_below=open_below,
+    )
+
+
+def describe_clusters(
+    seg: Segmentation, viewpoint: Sequence[float] | None = None
+) -> list[ClusterDescription]:
+    """:func:`describe_cluster` for every cluster, with what stands beside it and the
+    altitude cut-off of the search.
+
+    ``viewpoint`` is the sensor's position in the input frame when the scan is one view
+    (:func:`ontodetect.cloud.sensor_position`); then a cluster may also hide what
+    stands behind it (:func:`hidden_heights`), and whether the floor shows under a top
+    (:func:`open_below`) is not measured, since the top itself hides most of it.
+    """
+    ceiling = float(seg.config.prepare.altitude_cutoff)
+    hidden = np.full(len(seg), -math.inf)
+    if viewpoint is not None and len(seg):
+        eye = seg.prepared.level(np.asarray(viewpoint, dtype=np.float64))[0]
+        hidden = hidden_heights(
+            np.array([c.height for c in seg], dtype=np.float64),
+            np.array([c.box.center[:2] for c in seg], dtype=np.float64),
+            eye,
+        )
+    # From one view the floor under a top is hidden by the top itself: not measured there.
+    below = open_below(seg) if viewpoint is None else [None] * len(seg)
+    return [
+        describe_cluster(c, float(h), ceiling, float(b), o)
+        for c, h, b, o in zip(seg, shelter_heights(seg), hidden, below)
+    ]
+
+
+#: Cell of the horizontal grid on which :func:`open_below` compares a plane's footprint
+#: with the floor seen (m).
+FLOOR_CELL = 0.1
+#: Under a lower plane (m above the floor) the floor is seldom seen from eye height, so
+#: :func:`open_below` does not measure it: a coffee table looks closed below.
+OPEN_BELOW_HEIGHT = 0.55
+#: Rings of cells left out at the rim of a footprint, where the floor beyond the edge
+#: and the foot of the sides show (fewer when nothing would be left).
+OPEN_BELOW_RIM = 2
+
+
+def _cell_keys(xy: NDArray[np.float64]) -> NDArray[np.int64]:
+    """One integer per ``FLOOR_CELL`` cell of the points ``xy``."""
+    ij = np.floor(xy / FLOOR_CELL).astype(np.int64)
+    return (ij[:, 0] << 32) + (ij[:, 1] + (1 << 31))  # a step in j is a step of 1
+
+
+def open_below(seg: Segmentation) -> list[list[float]]:
+    """Per cluster and plane, the share of a horizontal plane's footprint under which the
+    floor was seen (0..1); NaN for tilted planes and planes lower than
+    ``OPEN_BELOW_HEIGHT``, and for all when no floor was found.
+
+    A top on legs or a pedestal leaves the floor under it open to the sensor; a cabinet,
+    a bed, a box or an upholstered seat hides it. The footprint is the plane's cells on a
+    ``FLOOR_CELL`` grid less ``OPEN_BELOW_RIM`` rings of cells at its rim (where the
+    floor beyond the edge and the foot of a box's sides show), fewer when nothing would
+    be left; the floor is the voxels the preparation labelled floor.
+    """
+    prep = seg.prepared
+    floor = prep.voxels.centers[prep.structure_label == FLOOR]
+    out: list[list[float]] = []
+    if not prep.floor_found or not len(floor):
+        return [[math.nan] * len(c.planes) for c in seg]
+    seen = np.unique(_cell_keys(floor[:, :2]))
+    for c in seg:
+        values = []
+        centers = np.asarray(c.centers)
+        for plane in c.planes:
+            if float(plane.tilt) > HORIZONTAL_TILT or float(plane.height) < OPEN_BELOW_HEIGHT:
+                values.append(math.nan)
+                continue
+            use = np.unique(_cell_keys(centers[plane.inliers, :2]))
+            for _ in range(OPEN_BELOW_RIM):
+                inner = use
+                for step in ((1 << 32), -(1 << 32), 1, -1):
+                    inner = inner[np.isin(inner + step, use)]
+                if not len(inner):
+                    break
+                use = inner
+            values.append(float(np.isin(use, seen).mean()))
+        out.append(values)
+    return out
+
+
+#: What a cluster hides behind it must lie in its shadow for at least this far (m),
+#: about the depth of a seat behind its backrest.
+SELF_SHADOW = 0.3
+#: The sensor must stand at least this far (m, horizontally) from the cluster's centre.
+SELF_SHADOW_DISTANCE = 0.5
+
+
+def hidden_heights(tops: NDArray, centers: NDArray, eye: Sequence[float]) -> NDArray:
+    """(clusters,) height under which each cluster hides what stands behind it.
+
+    Seen over an object's top at height ``top`` from an eye at height ``eye_z`` and
+    horizontal distance ``d``, the sight line comes down to height ``h`` only
+    ``(top − h) · d / (eye_z − top)`` beyond the object. Whatever stands behind it
+    lower than ``top − SELF_SHADOW · (eye_z − top) / d`` is out of sight for at least
+    ``SELF_SHADOW``: that height is returned (the top itself when the eye is not
+    above it), and ``-inf`` when the eye stands closer than ``SELF_SHADOW_DISTANCE``.
+
+    Parameters
+    ----------
+    tops : (k,) float
+        Top of each cluster above the floor (levelled frame).
+    centers : (k, 2) float
+        Horizontal centre of each cluster (levelled frame).
+    eye : (3,) float
+        The sensor's position in the levelled frame.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> tops, centers = np.array([0.9, 0.9, 1.6]), np.array([[2.0, 0], [0.3, 0], [2.0, 0]])
+    >>> hidden_heights(tops, centers, [0.0, 0.0, 1.5]).round(3).tolist()
+    [0.81, -inf, 1.6]
+    """
+    tops = np.asarray(tops, dtype=np.float64)
+    eye = np.asarray(eye, dtype=np.float64)
+    d = np.linalg.norm(np.asarray(centers, dtype=np.float64).reshape(-1, 2) - eye[:2], axis=1)
+    above = np.maximum(eye[2] - tops, 0.0)
+    hidden = tops - SELF_SHADOW * above / np.maximum(d, 1e-9)
+    return np.where(d >= SELF_SHADOW_DISTANCE, hidden, -math.inf)
+
+
+#: Horizontal planes of at least this area (m²) can hide ...
+SHELTER_AREA = 0.1
+#: ... what stands within this horizontal gap of their cluster's box (m).
+SHELTER_GAP = 0.4
+
+
+def _footprint(box: Any) -> NDArray:
+    """(2, 2) min and max corner of the xy rectangle around an upright box."""
+    xy = box_footprint(box.center, box.size, box.yaw)
+    return np.stack([xy.min(axis=0), xy.max(axis=0)])
+
+
+def shelter_heights(seg: Segmentation) -> NDArray:
+    """(clusters,) height of the highest large horizontal surface beside each cluster.
+
+    For every cluster, the highest horizontal plane (a desk or table top) of any other
+    cluster whose footprint comes within ``SHELTER_GAP`` of its own; ``-inf`` when there
+    is none. A chair pushed under a desk shows only its backrest above the desk's top:
+    this is what tells the scoring its seat may be hidden rather than absent.
+    """
+    n = len(seg)
+    tops = np.full(n, -math.inf)
+    boxes = np.zeros((n, 2, 2))
+    for k, c in enumerate(seg):
+        flat = [
+            float(p.height)
+            for p in c.planes
+            if float(p.tilt) < HORIZONTAL_TILT and float(p.area) >= SHELTER_AREA
+        ]
+        tops[k] = max(flat, default=-math.inf)
+        boxes[k] = _footprint(c.box)
+    if n == 0:
+        return tops
+    gap = np.maximum(boxes[None, :, 0] - boxes[:, None, 1], boxes[:, None, 0] - boxes[None, :, 1])
+    near = np.all(gap <= SHELTER_GAP, axis=2)
+    np.fill_diagonal(near, False)
+    return np.where(near, tops[None, :], -math.inf).max(axis=1)
