@@ -15,8 +15,8 @@ import yaml
 from ..config import NON_NEGATIVE, Boolean, Interval, check_param
 from ..errors import InvalidParameterError
 from ..ontology import Gaussian, parse_ontology
+from ..ontology import sigma_floor as feature_sigma_floor
 from ._settings import (
-    ABS_SIGMA_FLOOR,
     DIGITS,
     LINE_WIDTH,
     LONG_TEXT,
@@ -96,7 +96,7 @@ class FitSettings:
 
 def sigma_floor(prior: Any, feature: str, prior_share: float = PRIOR_SIGMA_SHARE) -> float:
     """The least σ a calibrated constraint may have."""
-    return max(prior_share * prior.sigma, ABS_SIGMA_FLOOR.get(feature, 0.0))
+    return max(prior_share * prior.sigma, feature_sigma_floor(feature))
 
 
 def fit_gaussian(

@@ -33,25 +33,8 @@ F1_TOLERANCE = 1e-9
 #: recall on held-out rooms. With fewer calibration rooms to leave out, nothing can be
 #: validated and the original is kept.
 MIN_GAIN_ROOMS = 4
-#: ...nor below these absolute floors (units of the feature: m, degrees, m², ratios).
-ABS_SIGMA_FLOOR: dict[str, float] = {
-    "tilt": 1.0,
-    "angle": 2.0,
-    "height": 0.02,
-    "top": 0.02,
-    "bottom": 0.02,
-    "gap": 0.02,
-    "distance": 0.01,
-    "length": 0.03,
-    "width": 0.03,
-    "breadth": 0.03,
-    "area": 0.01,
-    "fill": 0.03,
-    "open_below": 0.03,
-    "overlap": 0.03,
-    "rise": 0.02,
-    "planes": 0.5,
-}
+# ...nor below the feature's absolute floor, which the ontology's feature registry keeps
+# (ontodetect.ontology.sigma_floor).
 #: A one-sided bound or plateau end moves to this quantile of the values (``min``; 1 - it
 #: for ``max``). 0 takes the extreme value, the maximum-likelihood end of a flat range; a
 #: larger share ignores outliers but, with a few dozen objects, cuts off real ones.

@@ -114,7 +114,7 @@ def detect(
             from ..cad import fit_detections, write_object_map  # lazy: CLI start-up
             from ..pipeline import with_cad  # lazy: CLI start-up
 
-            fits = fit_detections(result, seed=seed)
+            fits = fit_detections(result, seed=seed, ontology=onto)
             result = with_cad(result, fits)
         files = write_outputs(result, out, picture=picture)
         if cad:

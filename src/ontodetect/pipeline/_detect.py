@@ -196,7 +196,7 @@ def _one_pass(
     d, ontology = config.detect, shared.ontology
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
-    seg = segment(cloud, config, seed=shared.seed, ground=shared.ground)
+    seg = segment(cloud, config, seed=shared.seed, ground=shared.ground, ontology=ontology)
     timings["segment"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()

@@ -20,6 +20,13 @@ from ._cluster import (
     region_growing,
     relabel,
 )
+from ._measure import (
+    describe_cluster,
+    describe_clusters,
+    hidden_heights,
+    open_below,
+    shelter_heights,
+)
 from ._parts import PartSeed, horizontal_parts, seed_style, seeded_clusters
 from ._segmentation import (
     FLAGS,
@@ -42,9 +49,13 @@ __all__ = [
     "cluster",
     "core_neighbors",
     "dbscan",
+    "describe_cluster",
+    "describe_clusters",
     "effective_radius",
     "euclidean_clusters",
+    "hidden_heights",
     "horizontal_parts",
+    "open_below",
     "plane_to_dict",
     "radius_graph",
     "region_growing",
@@ -52,5 +63,6 @@ __all__ = [
     "seed_style",
     "seeded_clusters",
     "segment",
+    "shelter_heights",
     "upright_box",
 ]

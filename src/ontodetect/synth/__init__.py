@@ -79,11 +79,11 @@ def __getattr__(name: str) -> Any:
     # The room builders are imported on first use: they are big, and the sensors and
     # the dataset reader do not need them.
     if name in ("build_room", "ROOM_TYPES"):
-        from . import rooms
+        from . import rooms  # lazy: big, and the sensors and the reader do not need it
 
         return getattr(rooms, name)
     if name in _FURNISHED:
-        from . import furnished
+        from . import furnished  # lazy: reads catalogues; only furnished rooms need it
 
         return getattr(furnished, name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -32,10 +32,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._progress import progress
+from .._version import __version__
 from ..cloud import PointCloud
 from ..errors import CorruptFileError, InvalidParameterError, ReadError, WriteError
 from ..io import atomic_write, atomic_write_text, read_cloud, write_cloud
 from . import sensors as _sensors
+from .rooms import ROOM_TYPES, build_room
 from .scene import CLASS_IDS, OrientedBox, Scene, SceneObject
 from .sensors import SENSORS, SensorOutput
 
@@ -126,13 +128,11 @@ class SynthResult:
 
 def room_types() -> tuple[str, ...]:
     """The room types :func:`synthesize` accepts (those of :mod:`ontodetect.synth.rooms`)."""
-    from .rooms import ROOM_TYPES
 
     return tuple(ROOM_TYPES)
 
 
 def _build_scene(room: str, seed: int, clutter: float) -> Scene:
-    from .rooms import build_room
 
     return build_room(room, seed, clutter=clutter)
 
@@ -437,7 +437,6 @@ def _objects_json(result: SynthResult) -> list[dict[str, Any]]:
 
 
 def _scene_json(result: SynthResult, files: list[str], num_points: int) -> dict[str, Any]:
-    from .. import __version__
 
     out = result.output
     data: dict[str, Any] = {

@@ -48,6 +48,7 @@ from numpy.typing import NDArray
 
 from ..errors import CorruptFileError, InvalidParameterError, ReadError
 from ..geometry import _mesh as M
+from .dataset import synthesize
 from .furniture import place
 from .rooms import _WALL_YAW, CONTACT_TOLERANCE, _box_rows, _overlapping, build_shell
 from .scene import CLASS_IDS, OrientedBox, Scene, SceneObject
@@ -1412,7 +1413,5 @@ def synthesize_furnished(
         Write it with :func:`~ontodetect.synth.dataset.write_synth`; scene.json carries
         the attribution under ``scene_extra``.
     """
-    from .dataset import synthesize
-
     scene = furnished_scene(room_type, seed, catalog_dir=catalog_dir, challenges=challenges)
     return synthesize(scene, sensor, seed, points=points, **sensor_opts)

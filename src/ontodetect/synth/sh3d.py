@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import CorruptFileError, ReadError
+from ..errors import CorruptFileError, InvalidParameterError, ReadError
 
 __all__ = [
     "CATALOG_DIR_ENV",
@@ -589,8 +589,6 @@ def load_model(entry: CatalogEntry) -> ModelMesh:
     [0.635, 0.637, 1.0]
     """
     if not isinstance(entry, CatalogEntry):
-        from ..errors import InvalidParameterError
-
         raise InvalidParameterError("entry", "a CatalogEntry", type(entry).__name__)
     mtime = Path(entry.path).stat().st_mtime_ns if Path(entry.path).is_file() else 0
     return _load_model_cached(entry, mtime)
