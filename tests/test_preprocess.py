@@ -376,3 +376,35 @@ def test_turn_rotates_the_levelled_frame_only(rng):
     assert np.allclose(turned.cloud.xyz[:, 2], plain.cloud.xyz[:, 2], atol=1e-9)
     assert np.allclose(turned.from_level(turned.cloud.xyz), pts, atol=1e-9)
     assert sum(p.kind == "wall" for p in turned.structure_planes) == 4
+
+
+def test_far_scan_is_prepared_in_a_local_frame():
+    # A room 400 km from its origin, as in UTM coordinates: the same floor and levelled
+    # cloud as the room at home, and levelling still maps the input frame.
+    from ontodetect.preprocess import local_origin
+
+    rng = np.random.default_rng(5)
+    floor = np.c_[rng.random((6000, 2)) * 4, rng.normal(0, 0.002, 6000)]
+    box = np.c_[rng.random((900, 2)) * 0.5 + 1, rng.random(900) * 0.45]
+    home = np.vstack([floor, box])
+    offset = np.array([4e5, 5.2e6, 30.0])
+    assert local_origin(home).tolist() == [0.0, 0.0, 0.0]
+    assert local_origin(home + offset).tolist() == [400002.0, 5200002.0, 0.0]
+    near = prepare(home)
+    far = prepare(home + offset)
+    assert far.floor_z == pytest.approx(near.floor_z + 30.0, abs=1e-3)
+    np.testing.assert_allclose(far.level(home + offset)[:, 2], near.level(home)[:, 2], atol=1e-3)
+    assert int(far.object_mask.sum()) == int(near.object_mask.sum())
+
+
+def test_far_scan_gives_the_same_detections():
+    from ontodetect import detect, point_cloud
+    from ontodetect.synth import synthesize
+
+    cloud = synthesize("tiny", seed=2).cloud
+    moved = point_cloud(cloud.xyz + [4e5, 4e5, 0.0], rgb=cloud.rgb)
+    a, b = detect(cloud), detect(moved)
+    assert [d.label for d in a.detections] == [d.label for d in b.detections]
+    for da, db in zip(a.detections, b.detections):
+        np.testing.assert_array_equal(da.point_indices, db.point_indices)
+        np.testing.assert_allclose(db.center[:2], np.add(da.center[:2], 4e5), atol=1e-3)

@@ -41,6 +41,8 @@ __all__ = [
     "FULL_CELL_PERCENTILE",
     "IDENTITY_TOLERANCE",
     "LEVEL_MIN_ANGLE",
+    "LOCAL_ORIGIN_DISTANCE",
+    "LOCAL_ORIGIN_RATIO",
     "MILLIMETRE",
     "MIN_SURFACE_CELLS",
     "SPACING_SAMPLE",
@@ -49,6 +51,7 @@ __all__ = [
     "PreparedScene",
     "find_ground",
     "guess_scale",
+    "local_origin",
     "prepare",
     "scale_from_travel",
     "surface_spacing",
@@ -316,6 +319,42 @@ def _up_hint(cloud: PointCloud) -> tuple[str, float | None]:
     return "z", None
 
 
+#: A scan whose centre lies farther than this from its origin (in its own units)...
+LOCAL_ORIGIN_DISTANCE = 1000.0
+#: ...and farther than this many times its own size, as in a building's map in UTM
+#: coordinates (400 km away, a few metres across), is prepared in a local frame: its
+#: coordinates less a whole-unit origin near its centre. Grids, neighbour searches and
+#: plane fits then work on numbers of a room's size; what preparation returns is still in
+#: the input frame. Scans near their origin are not touched.
+LOCAL_ORIGIN_RATIO = 10.0
+
+
+def local_origin(xyz: NDArray[np.float64]) -> NDArray[np.float64]:
+    """(3,) float: the whole-unit origin a scan far from its own origin is prepared around.
+
+    Zeros for a scan near its origin (see :data:`LOCAL_ORIGIN_DISTANCE`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> local_origin(np.array([[400000.2, 5e6, 1.0], [400004.9, 5e6 + 3, 2.0]])).tolist()
+    [400003.0, 5000002.0, 0.0]
+    >>> local_origin(np.array([[0.0, 0.0, 0.0], [5.0, 4.0, 3.0]])).tolist()
+    [0.0, 0.0, 0.0]
+    """
+    if len(xyz) == 0:
+        return np.zeros(3)
+    lo, hi = xyz.min(axis=0), xyz.max(axis=0)
+    centre = (lo + hi) / 2
+    far = float(np.abs(centre).max())
+    size = float((hi - lo).max())
+    if far <= LOCAL_ORIGIN_DISTANCE or far <= LOCAL_ORIGIN_RATIO * size:
+        return np.zeros(3)
+    origin = np.rint(centre)
+    origin[np.abs(centre) <= LOCAL_ORIGIN_RATIO * size] = 0.0
+    return origin
+
+
 @dataclass(frozen=True)
 class Ground:
     """What preparation finds before it turns the scan (:func:`find_ground`): the scale,
@@ -341,6 +380,9 @@ class Ground:
         The floor plane (its normal is the up direction).
     laps : dict
         Seconds per step.
+    origin : (3,) float
+        The local origin (:func:`local_origin`) subtracted from the input before all of
+        the above, which are in that local frame; zeros for most scans.
     """
 
     num_points: int
@@ -354,6 +396,7 @@ class Ground:
     cells: CellPlanes
     floor: FloorFit
     laps: dict[str, float] = field(default_factory=dict)
+    origin: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
 
 
 def find_ground(
@@ -372,6 +415,9 @@ def find_ground(
     n = len(xyz)
     if n == 0:
         raise InvalidParameterError("cloud", "a cloud with at least one point", "0 points")
+    origin = local_origin(xyz)
+    if origin.any():
+        xyz = xyz - origin
     clock = _Clock()
     k_s, scale_source = _choose_scale(xyz, cfg, scale, travelled)
     scaled = xyz * k_s if k_s != 1.0 else xyz
@@ -447,6 +493,7 @@ def find_ground(
         cells,
         floor,
         dict(clock.laps),
+        origin,
     )
 
 
@@ -513,6 +560,9 @@ def prepare(
         raise InvalidParameterError(
             "ground", f"the ground of this cloud ({n} points)", f"{ground.num_points} points"
         )
+    origin = ground.origin
+    if origin.any():
+        xyz = xyz - origin  # the local frame the ground was found in
     clock = _Clock()
     clock.laps.update(ground.laps)
     k_s, scale_source, colors = ground.scale, ground.scale_source, cloud.rgb
@@ -595,12 +645,17 @@ def prepare(
     if not cfg.structure:
         object_mask &= centers[:, 2] >= cfg.floor_band
     clock.lap("structure")
+    floor_z = float(floor.offset / k_s)
+    if origin.any():
+        # Back to the input frame: levelling now subtracts the local origin first.
+        to_level = to_level @ _translation(-origin)
+        floor_z += float(floor.normal @ origin)
     return PreparedScene(
         cloud=levelled,
         to_level=to_level,
         scale=k_s,
         up=floor.normal.copy(),
-        floor_z=float(floor.offset / k_s),
+        floor_z=floor_z,
         floor_found=floor.found,
         inliers=inliers,
         voxels=grid,
@@ -619,3 +674,10 @@ def prepare(
             "timings": clock.laps,
         },
     )
+
+
+def _translation(offset: NDArray[np.float64]) -> NDArray[np.float64]:
+    """4x4 transform: translation by ``offset``."""
+    T = np.eye(4)
+    T[:3, 3] = offset
+    return T
