@@ -109,7 +109,7 @@ def describe_cloud(cloud: PointCloud, *, seed: int = 0) -> CloudSummary:
     n = len(cloud)
     lo = xyz.min(axis=0) if n else np.zeros(3)
     hi = xyz.max(axis=0) if n else np.zeros(3)
-    spacing = estimate_spacing(xyz, seed=seed)
+    spacing = estimate_spacing(xyz, seed=seed, index="grid")  # no SciPy import at start-up
     ext = hi - lo
     # Points per square metre of surface: one point per spacing² cell.
     density = 1.0 / spacing**2 if spacing > 0 else 0.0
