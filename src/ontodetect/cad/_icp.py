@@ -34,8 +34,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .._transforms import yaw_pose as pose_matrix
 from ..errors import InvalidParameterError
+from ..geometry import yaw_pose as pose_matrix
 
 if TYPE_CHECKING:
     from scipy.spatial import cKDTree

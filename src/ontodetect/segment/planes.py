@@ -35,8 +35,8 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 from .._progress import progress
-from .._transforms import canonical_sign
 from ..errors import InvalidParameterError
+from ..geometry import canonical_sign
 
 __all__ = [
     "MsacResult",

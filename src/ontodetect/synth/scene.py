@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .._transforms import yaw_pose
+from ..geometry import yaw_pose
 
 __all__ = [
     "CLASS_IDS",
