@@ -39,10 +39,11 @@ from numpy.typing import ArrayLike, NDArray
 from .._progress import progress
 from ..cloud import PointCloud, point_cloud
 from ..errors import InvalidParameterError, WriteError
+from ..geometry import LevelFrame
 from ..geometry._mesh import Mesh
 from ..io import atomic_write_bytes, write_cloud
 from ..ontology import Ontology, builtin_ontology
-from ..preprocess import level_transform, rotation_between
+from ..preprocess import rotation_between
 from ._icp import INLIER_DISTANCE, KERNELS, ground_icp, pose_matrix
 from ._models import (
     DEFAULT_COLOR,
@@ -144,110 +145,6 @@ MIN_LAYER_POINTS = 10
 HEIGHT_SCALE = (0.75, 1.35)
 #: A seat longer than this many times its depth is a sofa's: scaled along its length.
 LONG_SEAT = 1.5
-
-
-# ---------------------------------------------------------------------------------------
-# Frames
-
-
-@dataclass(frozen=True, eq=False)
-class LevelFrame:
-    """The map between the input file's frame and the levelled frame (z up, floor at 0, metres).
-
-    Attributes
-    ----------
-    to_level : (4, 4) float
-        Input frame -> levelled frame, including the scale k_s.
-    floor_map : FloorMap, optional
-        Height of a bent floor above its plane (from the preparation).
-
-    Examples
-    --------
-    >>> f = LevelFrame.from_dict({"up": [0, 0, 1], "ground_z": -0.3, "scale": 1.0})
-    >>> f.level([[1.0, 2.0, -0.3]]).round(6).tolist()
-    [[1.0, 2.0, 0.0]]
-    """
-
-    to_level: NDArray[np.float64]
-    floor_map: Any = None
-
-    @classmethod
-    def identity(cls) -> LevelFrame:
-        """The input is already levelled (z up, floor at 0, metres)."""
-        return cls(np.eye(4))
-
-    @classmethod
-    def from_prepared(cls, prepared: Any) -> LevelFrame:
-        """The frame of a :class:`~ontodetect.preprocess.PreparedScene`."""
-        return cls(
-            np.asarray(prepared.to_level, dtype=np.float64), getattr(prepared, "floor_map", None)
-        )
-
-    @classmethod
-    def from_dict(cls, frame: Mapping[str, Any]) -> LevelFrame:
-        """The frame of a detections.json (``{"up": [3], "ground_z": z, "scale": k}``)."""
-        try:
-            up = np.asarray(frame["up"], dtype=np.float64).reshape(3)
-            ground = float(frame.get("ground_z", 0.0))
-            scale = float(frame.get("scale", 1.0))
-        except (KeyError, TypeError, ValueError) as exc:
-            raise InvalidParameterError(
-                "frame", "{up: [x, y, z], ground_z, scale}", dict(frame)
-            ) from exc
-        if not (
-            np.all(np.isfinite(up))
-            and np.linalg.norm(up) > 0
-            and math.isfinite(ground)
-            and scale > 0
-            and math.isfinite(scale)
-        ):
-            raise InvalidParameterError(
-                "frame", "a non-zero up vector, a finite ground_z and a positive scale", dict(frame)
-            )
-        return cls(level_transform(up / np.linalg.norm(up), ground * scale, scale))
-
-    @property
-    def scale(self) -> float:
-        """k_s: levelled metres per input unit."""
-        return float(np.linalg.norm(self.to_level[:3, 0]))
-
-    @property
-    def rotation(self) -> NDArray[np.float64]:
-        """(3, 3) rotation input -> levelled (without the scale)."""
-        return self.to_level[:3, :3] / self.scale
-
-    @property
-    def up(self) -> NDArray[np.float64]:
-        """(3,) up direction in the input frame."""
-        return self.rotation[2].copy()
-
-    def level(self, points: ArrayLike) -> NDArray[np.float64]:
-        """(k, 3) input-frame points in the levelled frame."""
-        pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-        out = pts @ self.to_level[:3, :3].T + self.to_level[:3, 3]
-        if self.floor_map is not None and len(out):
-            out[:, 2] -= self.floor_map.height(out[:, :2])
-        return out
-
-    def from_level(self, points: ArrayLike) -> NDArray[np.float64]:
-        """(k, 3) levelled points in the input frame and units."""
-        pts = np.array(points, dtype=np.float64).reshape(-1, 3)
-        if self.floor_map is not None and len(pts):
-            pts[:, 2] += self.floor_map.height(pts[:, :2])
-        inv = np.linalg.inv(self.to_level)
-        return pts @ inv[:3, :3].T + inv[:3, 3]
-
-    def pose_to_input(self, level_pose: ArrayLike) -> NDArray[np.float64]:
-        """A model -> levelled pose as model -> input frame (a bent floor lifts it locally)."""
-        T = np.array(level_pose, dtype=np.float64)
-        if self.floor_map is not None:
-            T[2, 3] += float(self.floor_map.height(T[None, :2, 3])[0])
-        return np.linalg.inv(self.to_level) @ T
-
-    def yaw_to_level(self, yaw: float) -> float:
-        """An input-frame yaw (about ``up``) in the levelled frame."""
-        d = self.rotation @ np.array([math.cos(yaw), math.sin(yaw), 0.0])
-        return math.atan2(d[1], d[0])
 
 
 # ---------------------------------------------------------------------------------------
@@ -1076,7 +973,7 @@ def fit_detections(
     _check_common(min_score)
     prep = result.segmentation.prepared
     cloud = result.cloud
-    frame = LevelFrame.from_prepared(prep)
+    frame = prep.frame
     levelled = prep.cloud.xyz
     entries = [
         {

@@ -78,7 +78,7 @@ def level_transform(up: ArrayLike, floor_offset: float, scale: float = 1.0) -> N
     return T
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class LevelFrame:
     """The map between the input file's frame and the levelled frame (z up, floor at 0, metres).
 
