@@ -323,9 +323,9 @@ def test_msac_invalid_parameters_raise(rng, kwargs, name):
 @pytest.mark.parametrize(
     ("points", "match"),
     [
-        (np.zeros((5, 2)), r"must be an \(n, 3\) array.*shape \(5, 2\)"),
+        (np.zeros((5, 2)), r"must be an array of shape \(n, 3\).*shape \(5, 2\)"),
         (np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, np.inf]]), "must be finite.*1 non-finite"),
-        ([["a", "b", "c"]], r"must be an \(n, 3\) array"),
+        ([["a", "b", "c"]], r"must be a numeric array"),
     ],
 )
 def test_invalid_points_raise(points, match):

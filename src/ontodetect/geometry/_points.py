@@ -19,6 +19,7 @@ def as_points(
     n: int | None = None,
     dtype: Any = np.float64,
     copy: bool = False,
+    finite: bool = False,
 ) -> NDArray[Any]:
     """``a`` as a contiguous (n, 3) numeric array, or an error naming ``name``.
 
@@ -34,11 +35,13 @@ def as_points(
         Of the result (float64 by default).
     copy : bool
         Always copy (otherwise only when a conversion needs one).
+    finite : bool
+        Also refuse NaN and infinite coordinates.
 
     Raises
     ------
     InvalidParameterError
-        Not of shape (n, 3), or not numbers.
+        Not of shape (n, 3), not numbers, or (with ``finite``) not finite.
 
     Examples
     --------
@@ -56,4 +59,7 @@ def as_points(
     if arr.dtype.kind not in "biuf":
         raise InvalidParameterError(name, "a numeric array", f"dtype {arr.dtype}")
     out = np.array(arr, dtype=dtype, copy=True) if copy else np.asarray(arr, dtype=dtype)
+    if finite and not np.isfinite(out).all():
+        bad = int(np.count_nonzero(~np.isfinite(out).all(axis=1)))
+        raise InvalidParameterError(name, "finite coordinates", f"{bad} non-finite point(s)")
     return np.ascontiguousarray(out)

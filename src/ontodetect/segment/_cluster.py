@@ -18,6 +18,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from ..errors import InvalidParameterError
+from ..geometry import as_points
 
 __all__ = [
     "core_neighbors",
@@ -32,13 +33,6 @@ __all__ = [
 MIN_CORE_NEIGHBORS = 2
 
 
-def _as_points(points: ArrayLike) -> NDArray[np.float64]:
-    pts = np.asarray(points, dtype=np.float64)
-    if pts.ndim != 2 or pts.shape[1] != 3:
-        raise InvalidParameterError("points", "an array of shape (n, 3)", f"shape {pts.shape}")
-    return pts
-
-
 def radius_graph(points: ArrayLike, radius: float) -> sparse.csr_matrix:
     """Symmetric sparse graph joining points closer than ``radius``; weights are distances.
 
@@ -51,7 +45,7 @@ def radius_graph(points: ArrayLike, radius: float) -> sparse.csr_matrix:
     >>> g.nnz, round(float(g[0, 1]), 3)
     (2, 0.03)
     """
-    pts = _as_points(points)
+    pts = as_points(points)
     if not radius > 0:
         raise InvalidParameterError("radius", "a float in the range (0, inf)", radius)
     m = len(pts)
@@ -136,7 +130,7 @@ def dbscan(
     >>> dbscan(pts, 0.05, 3).tolist()
     [0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, -1]
     """
-    pts = _as_points(points)
+    pts = as_points(points)
     m = len(pts)
     if m == 0:
         return np.zeros(0, dtype=np.int64)
@@ -174,7 +168,7 @@ def euclidean_clusters(
     >>> euclidean_clusters([[0, 0, 0], [0.04, 0, 0], [0.5, 0, 0]], 0.05).tolist()
     [0, 0, 1]
     """
-    pts = _as_points(points)
+    pts = as_points(points)
     if len(pts) == 0:
         return np.zeros(0, dtype=np.int64)
     g = radius_graph(pts, radius) if graph is None else graph
@@ -222,7 +216,7 @@ def region_growing(
     >>> len(set(lab[:100].tolist())), len(set(lab[100:].tolist())), lab[0] != lab[150]
     (1, 1, np.True_)
     """
-    pts = _as_points(points)
+    pts = as_points(points)
     nrm = np.asarray(normals, dtype=np.float64)
     if nrm.shape != pts.shape:
         raise InvalidParameterError(

@@ -36,7 +36,7 @@ from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 from .._progress import progress
 from ..errors import InvalidParameterError
-from ..geometry import canonical_sign
+from ..geometry import as_points, canonical_sign
 
 __all__ = [
     "MsacResult",
@@ -136,20 +136,15 @@ def _col_span(a: NDArray[np.float64]) -> NDArray[np.float64]:
 
 
 def _as_points(points: ArrayLike, name: str = "points") -> NDArray[np.float64]:
+    """Finite (n, 3) coordinates; any empty input is no points."""
     try:
-        pts = np.asarray(points, dtype=np.float64)
+        if np.size(points) == 0:
+            return np.zeros((0, 3))
     except (TypeError, ValueError) as exc:
         raise InvalidParameterError(
             name, "an (n, 3) array of coordinates", type(points).__name__
         ) from exc
-    if pts.size == 0:
-        return np.zeros((0, 3))
-    if pts.ndim != 2 or pts.shape[1] != 3:
-        raise InvalidParameterError(name, "an (n, 3) array of coordinates", f"shape {pts.shape}")
-    if not np.isfinite(pts).all():
-        bad = int(np.count_nonzero(~np.isfinite(pts).all(axis=1)))
-        raise InvalidParameterError(name, "finite coordinates", f"{bad} non-finite point(s)")
-    return pts
+    return as_points(points, name, finite=True)
 
 
 def _positive(name: str, value: object, *, allow_zero: bool = False) -> float:
