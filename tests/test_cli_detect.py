@@ -57,7 +57,10 @@ def test_detect_writes_the_contract(scene, tmp_path, capsys):
     assert np.mean(truth[best["point_indices"]] == 5) > 0.5
     labelled = read_cloud(out / "labelled.ply")
     assert len(labelled) == len(cloud)
-    assert set(np.unique(labelled.fields["instance"])) <= {0, *ids}
+    assert set(np.unique(labelled.fields["scalar_instance"])) <= {0, *ids}
+    # the input's own ground-truth `instance` field is kept as it was
+    assert np.array_equal(labelled.fields["instance"], cloud.fields["instance"])
+    assert (out / "boxes.txt").read_text().count("\n") == len(ids) + 1
     assert (out / "detections.png").read_bytes()[:4] == b"\x89PNG"
     printed = capsys.readouterr().out
     assert "chair" in printed
@@ -82,6 +85,8 @@ def test_detect_explain_prints_constraints(scene, tmp_path, capsys):
         (["--votes", "0"], "'detect.votes'"),
         (["--viewpoint", "1,2"], "'--viewpoint'"),
         (["--viewpoint", "1,up,2"], "'--viewpoint'"),
+        (["--labelled-format", "obj"], "'labelled_format'"),
+        (["--export", "boxes,kitti"], "'exports'"),
     ],
 )
 def test_detect_bad_parameters_exit_2_with_one_line(scene, tmp_path, capsys, args, message):
@@ -112,3 +117,17 @@ def test_detect_with_cad_adds_poses_and_the_object_map(scene, tmp_path):
         assert np.allclose(pose[:3, 2], [0, 0, 1], atol=1e-6)
         assert d["cad"]["rms"] >= 0
     assert (out / "object_map.ply").exists() and (out / "object_map.glb").exists()
+
+
+def test_detect_writes_laz_and_scannet_exports(scene, tmp_path):
+    laspy = pytest.importorskip("laspy")
+    out = tmp_path / "laz"
+    args = ["-q", "detect", str(scene / "cloud.ply"), "-o", str(out), "--no-picture"]
+    assert main([*args, "--labelled-format", "laz", "--export", "boxes,scannet"]) == 0
+    doc = json.loads((out / "detections.json").read_text())
+    las = laspy.read(out / "labelled.laz")
+    codes = set(np.unique(np.asarray(las.classification)).tolist())
+    assert codes <= {1, *range(64, 64 + len(doc["classes"]))} and max(codes) >= 64
+    summary = (out / "scannet" / "cloud.txt").read_text().splitlines()
+    assert len(summary) == len(doc["detections"])
+    assert not (out / "labelled.ply").exists()

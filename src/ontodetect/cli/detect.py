@@ -72,6 +72,20 @@ def detect(
         False, "--explain", help="Print every constraint's probability and the label costs."
     ),
     picture: bool = typer.Option(True, "--picture/--no-picture", help="Write detections.png."),
+    labelled_format: str = typer.Option(
+        "ply",
+        "--labelled-format",
+        help="Labelled cloud: ply (labelled.ply) or laz/las (labelled.laz, ASPRS "
+        "classification codes from 64 up; docs/outputs.md).",
+    ),
+    export: str = typer.Option(
+        "boxes",
+        "--export",
+        metavar="NAMES",
+        help="Comma-separated exports beside detections.json: boxes (boxes.txt, "
+        "OpenPCDet/mmdetection3d layout), scannet (ScanNet benchmark instance files); "
+        "'' for none.",
+    ),
     cad: bool = typer.Option(
         False,
         "--cad",
@@ -79,10 +93,12 @@ def detect(
         "(object_map.ply, object_map.glb) and add 'cad' to detections.json.",
     ),
 ) -> None:
-    """Detect objects; write detections.json, labelled.ply and detections.png."""
-    from ..outputs import write_outputs  # lazy: CLI start-up
+    """Detect objects; write detections.json, labelled.ply, boxes.txt and detections.png."""
+    from ..outputs import check_output_options, write_outputs  # lazy: CLI start-up
     from ..pipeline import detect as run_detect  # lazy: CLI start-up
 
+    exports = tuple(n.strip() for n in export.split(",") if n.strip())
+    check_output_options(labelled_format.lower(), exports)
     cfg = load_config(
         config,
         set_,
@@ -116,7 +132,13 @@ def detect(
 
             fits = fit_detections(result, seed=seed, ontology=onto)
             result = with_cad(result, fits)
-        files = write_outputs(result, out, picture=picture)
+        files = write_outputs(
+            result,
+            out,
+            picture=picture,
+            labelled_format=labelled_format.lower(),
+            exports=exports,
+        )
         if cad:
             object_map = write_object_map(fits, out, seed=seed)
     if explain_:
@@ -140,6 +162,7 @@ def detect(
     console.print(table)
     console.print(
         f"wrote {files.detections}, {files.labelled}"
+        + "".join(f", {p}" for p in files.exports)
         + (f", {files.picture}" if files.picture else "")
         + (", object_map.ply, object_map.glb" if object_map is not None else "")
     )

@@ -31,11 +31,20 @@ from ._detections import (
     validate_detections,
     write_detections,
 )
+from ._exports import (
+    EXPORTERS,
+    export_detections,
+    read_box_table,
+    read_scannet_instances,
+    write_box_table,
+    write_scannet_instances,
+)
 from ._layouts import DATASET_FORMATS
 
 __all__ = [
     "DATASET_FORMATS",
     "DETECTIONS_FORMAT",
+    "EXPORTERS",
     "FORMATS",
     "READERS",
     "WRITERS",
@@ -45,13 +54,18 @@ __all__ = [
     "atomic_write_text",
     "detect_format",
     "detections_schema",
+    "export_detections",
     "make_folder",
+    "read_box_table",
     "read_cloud",
     "read_detections",
+    "read_scannet_instances",
     "supported_formats",
     "validate_detections",
+    "write_box_table",
     "write_cloud",
     "write_detections",
+    "write_scannet_instances",
 ]
 
 
