@@ -166,6 +166,11 @@ def eval_(
         console.print(
             f"{CRITERION_NAMES[key]}: precision {_pct(m.precision)} %, recall {_pct(m.recall)} %"
         )
+    for key, ap in result.box_ap.items():
+        console.print(
+            f"box AP {key}: "
+            + ", ".join(f"{c} {'-' if v != v else _pct(v)}" for c, v in ap.items())
+        )
     t = result.scene_seconds()
     console.print(
         f"detection per scene: mean {t['mean']:.2f} s, max {t['max']:.2f} s; "
