@@ -131,3 +131,26 @@ def test_detect_writes_laz_and_scannet_exports(scene, tmp_path):
     summary = (out / "scannet" / "cloud.txt").read_text().splitlines()
     assert len(summary) == len(doc["detections"])
     assert not (out / "labelled.ply").exists()
+
+
+def test_detect_json_on_stdout_and_no_wrapping_in_a_pipe(scene, tmp_path):
+    import subprocess
+    import sys
+
+    out = tmp_path / ("a-very-long-folder-name-" * 5) / "result"
+    base = [sys.executable, "-m", "ontodetect", "detect", str(scene / "cloud.ply"), "-o", str(out)]
+    proc = subprocess.run(
+        [*base, "--json", "--no-picture", "--votes", "1"],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    doc = json.loads(proc.stdout)
+    assert doc["format"] == "ontodetect.detections/1" and doc["detections"]
+    assert str(out / "labelled.ply") in doc["files"] and str(out / "boxes.txt") in doc["files"]
+    proc = subprocess.run(
+        [*base, "--no-picture", "--votes", "1", "-v"], capture_output=True, text=True, check=True
+    )
+    wrote = [line for line in proc.stdout.splitlines() if line.startswith("wrote ")]
+    assert len(wrote) == 1 and str(out / "detections.json") in wrote[0], proc.stdout
+    assert "\x1b[" not in proc.stdout

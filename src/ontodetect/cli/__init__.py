@@ -56,9 +56,32 @@ def _global_options(
 # --version) imports none of them.
 from . import cad, calibrate, demo, detect, evaluate, info, segment, synth  # noqa: E402, F401
 
+#: Global options that may also be given after the command (``detect ... -q``).
+GLOBAL_FLAGS = frozenset({"-q", "--quiet", "-v", "--verbose"})
+
+
+def hoist_global_options(argv: list[str]) -> list[str]:
+    """Move the global flags given after the command in front of it (up to ``--``).
+
+    Examples
+    --------
+    >>> hoist_global_options(["detect", "a.ply", "-q", "-o", "out"])
+    ['-q', 'detect', 'a.ply', '-o', 'out']
+    >>> hoist_global_options(["detect", "--", "-q"])
+    ['detect', '--', '-q']
+    """
+    end = argv.index("--") if "--" in argv else len(argv)
+    flags = [a for a in argv[:end] if a in GLOBAL_FLAGS]
+    rest = [a for a in argv[:end] if a not in GLOBAL_FLAGS]
+    return [*flags, *rest, *argv[end:]]
+
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the CLI; returns the exit status instead of raising ``SystemExit``."""
+    """Run the CLI; returns the exit status instead of raising ``SystemExit``.
+
+    Global options (``-q``, ``-v``) are accepted before or after the command.
+    """
+    argv = hoist_global_options(list(sys.argv[1:] if argv is None else argv))
 
     def _show_warning(message, category, filename, lineno, file=None, line=None):
         err_console.print(f"[yellow]warning:[/] {message}", highlight=False)

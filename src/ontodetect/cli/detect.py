@@ -9,6 +9,7 @@ import typer
 from rich.table import Table
 
 from ..cloud import as_position
+from ..geometry import jsonable
 from ..io import read_cloud
 from . import app
 from ._common import load_config, load_ontology_option, number_list, room_option
@@ -72,6 +73,12 @@ def detect(
         False, "--explain", help="Print every constraint's probability and the label costs."
     ),
     picture: bool = typer.Option(True, "--picture/--no-picture", help="Write detections.png."),
+    as_json: bool = typer.Option(
+        False,
+        "--json",
+        help="Print the detections.json document (with 'files': what was written) on stdout "
+        "instead of the table.",
+    ),
     labelled_format: str = typer.Option(
         "ply",
         "--labelled-format",
@@ -141,6 +148,16 @@ def detect(
         )
         if cad:
             object_map = write_object_map(fits, out, seed=seed)
+    if as_json:
+        doc = result.to_dict()
+        doc["classes"] = result.class_names
+        doc["files"] = [
+            str(p)
+            for p in (files.detections, files.labelled, *files.exports, files.picture)
+            if p is not None
+        ] + (["object_map.ply", "object_map.glb"] if object_map is not None else [])
+        typer.echo(json.dumps(jsonable(doc)))
+        return
     if explain_:
         _print_explain(result)
     if state.quiet:
