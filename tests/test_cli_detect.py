@@ -154,3 +154,23 @@ def test_detect_json_on_stdout_and_no_wrapping_in_a_pipe(scene, tmp_path):
     wrote = [line for line in proc.stdout.splitlines() if line.startswith("wrote ")]
     assert len(wrote) == 1 and str(out / "detections.json") in wrote[0], proc.stdout
     assert "\x1b[" not in proc.stdout
+
+
+def test_explain_filtered_by_class_and_size_and_as_json(scene, tmp_path, capsys):
+    args = ["detect", str(scene / "cloud.ply"), "-o", str(tmp_path), "--no-picture"]
+    assert main([*args, "--votes", "1", "--json", "--explain", "--min-points", "0"]) == 0
+    every = json.loads(capsys.readouterr().out)["explain"]
+    assert main([*args, "--votes", "1", "--json", "--explain", "chair", "--min-points", "50"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    chairs = doc["explain"]
+    assert chairs and len(chairs) < len(every)
+    for row in chairs:
+        assert row["num_points"] >= 50
+        best = next(c["class"] for c in row["classes"] if c["class"] != "none")
+        assert row["label"] == "chair" or best == "chair"
+    kept = {row["cluster"] for row in chairs}
+    assert {d["cluster"] for d in doc["detections"] if d["label"] == "chair"} <= kept
+    # printed, the filter keeps the tables short
+    assert main([*args, "--votes", "1", "--explain", "chair,table", "-q"]) == 0
+    text = capsys.readouterr().out
+    assert "constraints of chair" in text and "constraints of sofa" not in text

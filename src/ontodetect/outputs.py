@@ -7,6 +7,7 @@ half-written result beside an older complete one.
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -196,14 +197,40 @@ def write_outputs(
     return OutputFiles(det_path, ply_path, png, tuple(exported))
 
 
-def explain(result: Result, *, top: int = 3) -> list[dict[str, Any]]:
+def explain(
+    result: Result,
+    *,
+    top: int = 3,
+    classes: Sequence[str] | None = None,
+    min_points: int = 0,
+) -> list[dict[str, Any]]:
     """Per cluster: class probabilities, the constraints of the best classes and label costs.
 
     This is what ``detect --explain`` prints (the thesis's Tables 4.2 and 4.9).
+
+    Parameters
+    ----------
+    top : int
+        Classes shown per cluster, most probable first.
+    classes : sequence of str, optional
+        Keep only the clusters labelled with one of these, or whose most probable class
+        (other than none) is one of these.
+    min_points : int
+        Keep only the clusters with at least this many points (most clusters of a real
+        scan are a few points of noise).
     """
+    if isinstance(min_points, bool) or not isinstance(min_points, int) or min_points < 0:
+        raise InvalidParameterError("min_points", "an integer >= 0", min_points)
+    wanted = None if classes is None else set(classes)
     rows = []
     for k, (c, s, choice) in enumerate(zip(result.segmentation, result.scores, result.choices)):
+        if c.num_points < min_points:
+            continue
         ranked = sorted(s.probabilities.items(), key=lambda kv: -kv[1])
+        if wanted is not None:
+            best = next((name for name, _ in ranked if name != "none"), None)
+            if choice.label not in wanted and best not in wanted:
+                continue
         classes = []
         for name, p in ranked[:top]:
             if name == "none":

@@ -76,12 +76,44 @@ def hoist_global_options(argv: list[str]) -> list[str]:
     return [*flags, *rest, *argv[end:]]
 
 
+#: Options whose value may be left out, and the value they then take (``--explain`` alone
+#: explains every class; ``--explain chair,table`` those).
+OPTIONAL_VALUES = {"--explain": "all"}
+
+
+def fill_optional_values(argv: list[str]) -> list[str]:
+    """Give the options of :data:`OPTIONAL_VALUES` their default when no value follows.
+
+    A following token is the option's value unless it starts with ``-`` or looks like a
+    path (holds ``/`` or ``.``); class lists never do.
+
+    Examples
+    --------
+    >>> fill_optional_values(["detect", "a.ply", "--explain", "-o", "out"])
+    ['detect', 'a.ply', '--explain', 'all', '-o', 'out']
+    >>> fill_optional_values(["detect", "--explain", "chair,table", "a.ply"])
+    ['detect', '--explain', 'chair,table', 'a.ply']
+    >>> fill_optional_values(["detect", "--explain", "a.ply"])
+    ['detect', '--explain', 'all', 'a.ply']
+    """
+    out: list[str] = []
+    for k, arg in enumerate(argv):
+        out.append(arg)
+        if arg == "--":
+            return out + argv[k + 1 :]
+        if arg in OPTIONAL_VALUES:
+            nxt = argv[k + 1] if k + 1 < len(argv) else None
+            if nxt is None or nxt.startswith("-") or "/" in nxt or "." in nxt:
+                out.append(OPTIONAL_VALUES[arg])
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI; returns the exit status instead of raising ``SystemExit``.
 
     Global options (``-q``, ``-v``) are accepted before or after the command.
     """
-    argv = hoist_global_options(list(sys.argv[1:] if argv is None else argv))
+    argv = fill_optional_values(hoist_global_options(list(sys.argv[1:] if argv is None else argv)))
 
     def _show_warning(message, category, filename, lineno, file=None, line=None):
         err_console.print(f"[yellow]warning:[/] {message}", highlight=False)

@@ -69,8 +69,18 @@ def detect(
         "(detect.votes, default 3; 1: one pass, about half the time).",
     ),
     seed: int = typer.Option(0, "--seed", help="Seed of every random step."),
-    explain_: bool = typer.Option(
-        False, "--explain", help="Print every constraint's probability and the label costs."
+    explain_: str | None = typer.Option(
+        None,
+        "--explain",
+        metavar="[CLASSES]",
+        help="Print every constraint's probability and the label costs, for every cluster "
+        "or those of CLASSES (comma-separated: --explain chair,table); with --json, as "
+        "'explain' in the document.",
+    ),
+    min_points: int = typer.Option(
+        10,
+        "--min-points",
+        help="With --explain: leave out clusters with fewer points (one-point noise).",
     ),
     picture: bool = typer.Option(True, "--picture/--no-picture", help="Write detections.png."),
     as_json: bool = typer.Option(
@@ -101,10 +111,13 @@ def detect(
     ),
 ) -> None:
     """Detect objects; write detections.json, labelled.ply, boxes.txt and detections.png."""
-    from ..outputs import check_output_options, write_outputs  # lazy: CLI start-up
+    from ..outputs import check_output_options, explain, write_outputs  # lazy: CLI start-up
     from ..pipeline import detect as run_detect  # lazy: CLI start-up
 
     exports = tuple(n.strip() for n in export.split(",") if n.strip())
+    explain_classes = None
+    if explain_ is not None and explain_ != "all":
+        explain_classes = [n.strip() for n in explain_.split(",") if n.strip()]
     check_output_options(labelled_format.lower(), exports)
     cfg = load_config(
         config,
@@ -156,10 +169,12 @@ def detect(
             for p in (files.detections, files.labelled, *files.exports, files.picture)
             if p is not None
         ] + (["object_map.ply", "object_map.glb"] if object_map is not None else [])
+        if explain_ is not None:
+            doc["explain"] = explain(result, classes=explain_classes, min_points=min_points)
         typer.echo(json.dumps(jsonable(doc)))
         return
-    if explain_:
-        _print_explain(result)
+    if explain_ is not None:
+        _print_explain(explain(result, classes=explain_classes, min_points=min_points))
     if state.quiet:
         return
     table = Table(
@@ -187,10 +202,8 @@ def detect(
         console.print(json.dumps(result.to_dict()["timings"]))
 
 
-def _print_explain(result) -> None:
-    from ..outputs import explain  # lazy: CLI start-up
-
-    for row in explain(result):
+def _print_explain(rows) -> None:
+    for row in rows:
         head = (
             f"cluster {row['cluster']}: {row['num_points']} points, {row['planes']} planes"
             f" -> {row['label'] or 'no label'}" + (f" ({row['reason']})" if row["reason"] else "")
