@@ -174,3 +174,28 @@ def test_explain_filtered_by_class_and_size_and_as_json(scene, tmp_path, capsys)
     assert main([*args, "--votes", "1", "--explain", "chair,table", "-q"]) == 0
     text = capsys.readouterr().out
     assert "constraints of chair" in text and "constraints of sofa" not in text
+
+
+def test_detect_many_scans_from_a_folder_a_glob_and_paths(scene, tmp_path, capsys):
+    import shutil
+
+    scans = tmp_path / "scans"
+    scans.mkdir()
+    for name in ("a", "b"):
+        shutil.copy(scene / "cloud.ply", scans / f"{name}.ply")
+    (scans / "notes.txt.md").write_text("not a scan")
+    opts = ["--no-picture", "--votes", "1", "--json", "-q"]
+    assert main(["detect", str(scans), "-o", str(tmp_path / "o1"), "--jobs", "2", *opts]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert [r["input"] for r in rows] == [str(scans / "a.ply"), str(scans / "b.ply")]
+    assert rows[0]["objects"] == rows[1]["objects"] > 0
+    one = json.loads((tmp_path / "o1" / "a" / "detections.json").read_text())
+    two = json.loads((tmp_path / "o1" / "b" / "detections.json").read_text())
+    assert [d["point_indices"] for d in one["detections"]] == [
+        d["point_indices"] for d in two["detections"]
+    ]
+    pattern = str(scans / "*.ply")
+    assert main(["detect", pattern, str(scans / "a.ply"), "-o", str(tmp_path / "o2"), *opts]) == 0
+    assert len(json.loads(capsys.readouterr().out)) == 2  # a.ply once
+    assert main(["detect", str(scans / "*.pcd"), "-o", str(tmp_path / "o3"), *opts]) == 2
+    assert "no readable scan matches" in capsys.readouterr().err

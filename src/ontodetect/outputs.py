@@ -16,9 +16,9 @@ import numpy as np
 
 from .cloud import PointCloud
 from .errors import InvalidParameterError
-from .io import EXPORTERS, export_detections, make_folder, write_cloud
+from .io import EXPORTERS, export_detections, make_folder, read_cloud, write_cloud
 from .io._detections import write_detections
-from .pipeline import Result
+from .pipeline import Result, detect
 from .render import BoxDrawing, class_color, render_scene
 
 __all__ = [
@@ -27,6 +27,7 @@ __all__ = [
     "LAS_UNCLASSIFIED",
     "OutputFiles",
     "check_output_options",
+    "detect_file",
     "explain",
     "labelled_cloud",
     "labelled_comments",
@@ -195,6 +196,25 @@ def write_outputs(
             title=title or f"{src}: {len(result.detections)} objects",
         )
     return OutputFiles(det_path, ply_path, png, tuple(exported))
+
+
+def detect_file(
+    path: str | os.PathLike[str],
+    out_dir: str | os.PathLike[str],
+    *,
+    format: str | None = None,
+    detect_options: dict[str, Any] | None = None,
+    **write_options: Any,
+) -> OutputFiles:
+    """Read one scan, detect, and write its files: one unit of a batch run.
+
+    ``detect_options`` are keyword arguments of :func:`ontodetect.pipeline.detect`
+    (``config``, ``ontology``, ``room``, ``seed``...); ``write_options`` those of
+    :func:`write_outputs`. Picklable arguments in, paths out: any map over scans
+    (``ontodetect.evaluation.map_scenes``, ``detect --jobs``) can run it.
+    """
+    result = detect(read_cloud(path, format=format), **(detect_options or {}))
+    return write_outputs(result, out_dir, **write_options)
 
 
 def explain(

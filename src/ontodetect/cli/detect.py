@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import json
 from pathlib import Path
 
@@ -9,8 +10,9 @@ import typer
 from rich.table import Table
 
 from ..cloud import as_position
+from ..errors import OntoDetectError
 from ..geometry import jsonable
-from ..io import read_cloud
+from ..io import expand_inputs, read_cloud
 from . import app
 from ._common import load_config, load_ontology_option, number_list, room_option
 from ._console import console, reporting, state
@@ -18,8 +20,14 @@ from ._console import console, reporting, state
 
 @app.command()
 def detect(
-    path: Path = typer.Argument(..., help="Point cloud file or scan folder."),
+    paths: list[Path] = typer.Argument(
+        ...,
+        metavar="INPUT...",
+        help="Point cloud files, scan folders, folders of scans or quoted glob patterns "
+        "('scans/*.ply'); with more than one scan, each gets OUT/<name>/.",
+    ),
     out: Path = typer.Option(..., "--out", "-o", help="Output folder."),
+    jobs: int = typer.Option(1, "--jobs", "-j", help="Scans in parallel (0: one per CPU)."),
     format: str | None = typer.Option(None, "--format", "-f", help="Force the input format."),
     config: Path | None = typer.Option(None, "--config", "-c", help="Configuration YAML."),
     set_: list[str] = typer.Option(
@@ -134,6 +142,30 @@ def detect(
     eye = number_list(viewpoint, float, "--viewpoint")
     if eye is not None:
         eye = as_position(eye, "--viewpoint")
+    inputs = expand_inputs(paths)
+    if len(inputs) > 1 or inputs[0] not in paths:
+        if cad or explain_ is not None:
+            raise typer.BadParameter("--cad and --explain take one scan", param_hint="INPUT...")
+        _detect_many(
+            inputs,
+            out,
+            jobs=jobs,
+            as_json=as_json,
+            format=format,
+            detect_options={
+                "config": cfg,
+                "ontology": onto,
+                "room": room_arg,
+                "indoor": indoor,
+                "seed": seed,
+                "viewpoint": eye,
+            },
+            picture=picture,
+            labelled_format=labelled_format.lower(),
+            exports=exports,
+        )
+        return
+    path = inputs[0]
     with reporting():
         cloud = read_cloud(path, format=format)
         result = run_detect(
@@ -200,6 +232,64 @@ def detect(
     )
     if state.verbose:
         console.print(json.dumps(result.to_dict()["timings"]))
+
+
+def _scan_names(inputs: list[Path]) -> list[str]:
+    """A folder name per scan: its stem, made unique with ``_2``, ``_3``..."""
+    names: list[str] = []
+    for p in inputs:
+        stem = p.name[: -len("_vert.npy")] if p.name.endswith("_vert.npy") else p.stem
+        name, k = stem or "scan", 1
+        while name in names:
+            k += 1
+            name = f"{stem}_{k}"
+        names.append(name)
+    return names
+
+
+def _detect_unit(unit: tuple[Path, Path], format, detect_options, write_options) -> dict:
+    """One scan of a batch (module level: picklable for worker processes)."""
+    from ..outputs import detect_file  # lazy: CLI start-up
+
+    path, folder = unit
+    try:
+        files = detect_file(
+            path, folder, format=format, detect_options=detect_options, **write_options
+        )
+    except OntoDetectError as exc:
+        return {"input": str(path), "out": str(folder), "error": str(exc)}
+    doc = json.loads(files.detections.read_text(encoding="utf-8"))
+    return {
+        "input": str(path),
+        "out": str(folder),
+        "objects": len(doc["detections"]),
+        "labels": sorted({d["label"] for d in doc["detections"]}),
+    }
+
+
+def _detect_many(inputs, out, *, jobs, as_json, format, detect_options, **write_options):
+    from ..evaluation import map_scenes  # lazy: CLI start-up
+
+    units = [(p, out / name) for p, name in zip(inputs, _scan_names(inputs))]
+    fn = functools.partial(
+        _detect_unit, format=format, detect_options=detect_options, write_options=write_options
+    )
+    with reporting():
+        rows = map_scenes(fn, units, jobs=jobs, description="Scans")
+    failed = [r for r in rows if "error" in r]
+    if as_json:
+        typer.echo(json.dumps(rows))
+    elif not state.quiet:
+        table = Table(title=f"{len(rows)} scans -> {out}")
+        for col in ("input", "objects", "output"):
+            table.add_column(col, justify="right" if col == "objects" else "left")
+        for r in rows:
+            table.add_row(r["input"], str(r.get("objects", "failed")), r["out"])
+        console.print(table)
+    for r in failed:
+        console.print(f"[red]failed[/] {r['input']}: {r['error']}")
+    if failed:
+        raise typer.Exit(2)
 
 
 def _print_explain(rows) -> None:

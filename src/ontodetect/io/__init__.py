@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import importlib
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -39,6 +39,7 @@ from ._exports import (
     write_box_table,
     write_scannet_instances,
 )
+from ._inputs import expand_inputs as _expand_inputs
 from ._layouts import DATASET_FORMATS
 
 __all__ = [
@@ -54,6 +55,7 @@ __all__ = [
     "atomic_write_text",
     "detect_format",
     "detections_schema",
+    "expand_inputs",
     "export_detections",
     "make_folder",
     "read_box_table",
@@ -202,6 +204,16 @@ class _Registry(dict):
 READERS: dict[str, Callable[..., PointCloud]] = _Registry("reader")
 #: Format name -> writer ``fn(path, cloud, **options) -> Path``.
 WRITERS: dict[str, Callable[..., Path]] = _Registry("writer")
+
+
+def expand_inputs(paths: Iterable[str | os.PathLike[str]]) -> list[Path]:
+    """The scans that paths, folders of scans and glob patterns name, in order, each once.
+
+    A file or a folder that is one scan (ScanNet, S3DIS, 3DTK) is itself; any other folder
+    stands for the readable files in it, sorted; a path that does not exist but holds
+    ``*``, ``?`` or ``[`` is a glob pattern.
+    """
+    return _expand_inputs(paths, detect_format)
 
 
 def supported_formats(kind: str = "read") -> list[str]:
