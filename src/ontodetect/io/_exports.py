@@ -106,17 +106,37 @@ def read_box_table(path: str | os.PathLike[str]) -> list[dict[str, Any]]:
     return rows
 
 
+#: File-name endings of ScanNet scans that are not part of the scene id.
+_SCANNET_ENDINGS = ("_vert.npy", "_vh_clean_2.ply")
+
+
+def _scene_name(source: str) -> str:
+    """The scene id of an input file: ``scene0000_00`` for ScanNet's files, else the stem.
+
+    Examples
+    --------
+    >>> _scene_name("a/scene0000_00_vert.npy"), _scene_name("room.ply")
+    ('scene0000_00', 'room')
+    """
+    name = Path(source).name
+    for ending in _SCANNET_ENDINGS:
+        if name.endswith(ending) and len(name) > len(ending):
+            return name[: -len(ending)]
+    return Path(name).stem or "scene"
+
+
 def write_scannet_instances(
     folder: str | os.PathLike[str], document: Mapping[str, Any], scene: str | None = None
 ) -> Path:
     """Write the ScanNet benchmark's instance files for one scene; return the summary file.
 
     ``folder/<scene>.txt`` lists ``pred_mask/<scene>_<k>.txt <nyu40 id> <score>``, and each
-    mask file holds ``num_points`` lines of ``0`` or ``1``. ``scene`` defaults to the stem
-    of the document's ``source``.
+    mask file holds ``num_points`` lines of ``0`` or ``1``. ``scene`` defaults to the
+    scene id of the document's ``source`` (``scene0000_00`` for ``scene0000_00_vert.npy``
+    or ``scene0000_00_vh_clean_2.ply``, the stem otherwise).
     """
     if scene is None:
-        scene = Path(str(document.get("source", "") or "scene")).stem or "scene"
+        scene = _scene_name(str(document.get("source", "") or "scene"))
     if not scene or "/" in scene or scene.startswith("."):
         raise InvalidParameterError("scene", "a plain file name", scene)
     root = make_folder(folder, "ScanNet export folder")
