@@ -26,6 +26,16 @@ if [ "$(uname -s)" = "Linux" ] && ! ldconfig -p 2>/dev/null | grep -q 'libusb-1\
     fi
 fi
 
+# 1a. Chromium: the viewer's test (tests/test_viewer.py) opens view.html in headless Chromium.
+#     Only installed when missing and apt-get can; the test installs it the same way.
+if [ "$(uname -s)" = "Linux" ] && ! command -v chromium >/dev/null 2>&1 \
+        && [ "$(id -u)" = "0" ] && command -v apt-get >/dev/null 2>&1; then
+    say "installing chromium with apt-get (the viewer's browser test)"
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get update -qq >/dev/null
+    apt-get install -y -qq chromium >/dev/null || say "chromium could not be installed"
+fi
+
 # 1b. With --with-furniture (the generalization benchmark): Debian's Sweet Home 3D furniture
 #     catalogues, which furnish its simulated rooms. Unit tests never need them.
 if [ "${1:-}" = "--with-furniture" ] && [ ! -d /usr/share/sweethome3d/furniture ] \

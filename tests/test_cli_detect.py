@@ -57,7 +57,10 @@ def test_detect_writes_the_contract(scene, tmp_path, capsys):
     assert np.mean(truth[best["point_indices"]] == 5) > 0.5
     labelled = read_cloud(out / "labelled.ply")
     assert len(labelled) == len(cloud)
-    assert set(np.unique(labelled.fields["instance"])) <= {0, *ids}
+    assert set(np.unique(labelled.fields["scalar_instance"])) <= {0, *ids}
+    # the input's own ground-truth `instance` field is kept as it was
+    assert np.array_equal(labelled.fields["instance"], cloud.fields["instance"])
+    assert (out / "boxes.txt").read_text().count("\n") == len(ids) + 1
     assert (out / "detections.png").read_bytes()[:4] == b"\x89PNG"
     printed = capsys.readouterr().out
     assert "chair" in printed
@@ -82,6 +85,8 @@ def test_detect_explain_prints_constraints(scene, tmp_path, capsys):
         (["--votes", "0"], "'detect.votes'"),
         (["--viewpoint", "1,2"], "'--viewpoint'"),
         (["--viewpoint", "1,up,2"], "'--viewpoint'"),
+        (["--labelled-format", "obj"], "'labelled_format'"),
+        (["--export", "boxes,kitti"], "'exports'"),
     ],
 )
 def test_detect_bad_parameters_exit_2_with_one_line(scene, tmp_path, capsys, args, message):
@@ -112,3 +117,85 @@ def test_detect_with_cad_adds_poses_and_the_object_map(scene, tmp_path):
         assert np.allclose(pose[:3, 2], [0, 0, 1], atol=1e-6)
         assert d["cad"]["rms"] >= 0
     assert (out / "object_map.ply").exists() and (out / "object_map.glb").exists()
+
+
+def test_detect_writes_laz_and_scannet_exports(scene, tmp_path):
+    laspy = pytest.importorskip("laspy")
+    out = tmp_path / "laz"
+    args = ["-q", "detect", str(scene / "cloud.ply"), "-o", str(out), "--no-picture"]
+    assert main([*args, "--labelled-format", "laz", "--export", "boxes,scannet"]) == 0
+    doc = json.loads((out / "detections.json").read_text())
+    las = laspy.read(out / "labelled.laz")
+    codes = set(np.unique(np.asarray(las.classification)).tolist())
+    assert codes <= {1, *range(64, 64 + len(doc["classes"]))} and max(codes) >= 64
+    summary = (out / "scannet" / "cloud.txt").read_text().splitlines()
+    assert len(summary) == len(doc["detections"])
+    assert not (out / "labelled.ply").exists()
+
+
+def test_detect_json_on_stdout_and_no_wrapping_in_a_pipe(scene, tmp_path):
+    import subprocess
+    import sys
+
+    out = tmp_path / ("a-very-long-folder-name-" * 5) / "result"
+    base = [sys.executable, "-m", "ontodetect", "detect", str(scene / "cloud.ply"), "-o", str(out)]
+    proc = subprocess.run(
+        [*base, "--json", "--no-picture", "--votes", "1"],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    doc = json.loads(proc.stdout)
+    assert doc["format"] == "ontodetect.detections/1" and doc["detections"]
+    assert str(out / "labelled.ply") in doc["files"] and str(out / "boxes.txt") in doc["files"]
+    proc = subprocess.run(
+        [*base, "--no-picture", "--votes", "1", "-v"], capture_output=True, text=True, check=True
+    )
+    wrote = [line for line in proc.stdout.splitlines() if line.startswith("wrote ")]
+    assert len(wrote) == 1 and str(out / "detections.json") in wrote[0], proc.stdout
+    assert "\x1b[" not in proc.stdout
+
+
+def test_explain_filtered_by_class_and_size_and_as_json(scene, tmp_path, capsys):
+    args = ["detect", str(scene / "cloud.ply"), "-o", str(tmp_path), "--no-picture"]
+    assert main([*args, "--votes", "1", "--json", "--explain", "--min-points", "0"]) == 0
+    every = json.loads(capsys.readouterr().out)["explain"]
+    assert main([*args, "--votes", "1", "--json", "--explain", "chair", "--min-points", "50"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    chairs = doc["explain"]
+    assert chairs and len(chairs) < len(every)
+    for row in chairs:
+        assert row["num_points"] >= 50
+        best = next(c["class"] for c in row["classes"] if c["class"] != "none")
+        assert row["label"] == "chair" or best == "chair"
+    kept = {row["cluster"] for row in chairs}
+    assert {d["cluster"] for d in doc["detections"] if d["label"] == "chair"} <= kept
+    # printed, the filter keeps the tables short
+    assert main([*args, "--votes", "1", "--explain", "chair,table", "-q"]) == 0
+    text = capsys.readouterr().out
+    assert "constraints of chair" in text and "constraints of sofa" not in text
+
+
+def test_detect_many_scans_from_a_folder_a_glob_and_paths(scene, tmp_path, capsys):
+    import shutil
+
+    scans = tmp_path / "scans"
+    scans.mkdir()
+    for name in ("a", "b"):
+        shutil.copy(scene / "cloud.ply", scans / f"{name}.ply")
+    (scans / "notes.txt.md").write_text("not a scan")
+    opts = ["--no-picture", "--votes", "1", "--json", "-q"]
+    assert main(["detect", str(scans), "-o", str(tmp_path / "o1"), "--jobs", "2", *opts]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert [r["input"] for r in rows] == [str(scans / "a.ply"), str(scans / "b.ply")]
+    assert rows[0]["objects"] == rows[1]["objects"] > 0
+    one = json.loads((tmp_path / "o1" / "a" / "detections.json").read_text())
+    two = json.loads((tmp_path / "o1" / "b" / "detections.json").read_text())
+    assert [d["point_indices"] for d in one["detections"]] == [
+        d["point_indices"] for d in two["detections"]
+    ]
+    pattern = str(scans / "*.ply")
+    assert main(["detect", pattern, str(scans / "a.ply"), "-o", str(tmp_path / "o2"), *opts]) == 0
+    assert len(json.loads(capsys.readouterr().out)) == 2  # a.ply once
+    assert main(["detect", str(scans / "*.pcd"), "-o", str(tmp_path / "o3"), *opts]) == 2
+    assert "no readable scan matches" in capsys.readouterr().err

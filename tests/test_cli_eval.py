@@ -106,3 +106,34 @@ def test_calibrate_writes_a_valid_ontology_and_states_the_split(dataset, tmp_pat
     assert {r["class"] for r in doc["held_out"]} == {"chair", "sofa", "table", "overall"}
     assert main(["calibrate", str(dataset), "-o", str(out), "--split", "2"]) == 2
     assert "'split' parameter" in capsys.readouterr().err
+
+
+def test_eval_json_on_stdout_has_box_ap_and_global_flags_after_the_command(dataset, tmp_path):
+    import subprocess
+    import sys
+
+    out = tmp_path / "report"
+    assert main(["eval", str(dataset), "-o", str(out), "--save-detections", "-q"]) == 0
+    # a real pipe: one JSON document, no table, no colour codes
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "ontodetect",
+            "eval",
+            str(dataset),
+            "--json",
+            "--detections",
+            str(out / "detections"),
+            "-q",
+        ],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    assert "\x1b[" not in proc.stdout
+    doc = json.loads(proc.stdout)
+    assert set(doc["box_ap"]) == {"aligned@0.25", "aligned@0.5", "oriented@0.25", "oriented@0.5"}
+    # the simulator's objects.json carries the boxes: two chairs, two tables
+    assert doc["box_ap"]["aligned@0.25"]["chair"] is not None
+    assert doc["evaluations"]["iou@0.25"]["per_class"]["chair"]["num_gt"] == 2

@@ -1,4 +1,4 @@
-"""Writing a detection result: detections.json, a labelled PLY and a picture.
+"""Writing a detection result: detections.json, a labelled cloud (PLY or LAZ) and a picture.
 
 Every file is written atomically, so an interrupted run never leaves a
 half-written result beside an older complete one.
@@ -7,18 +7,47 @@ half-written result beside an older complete one.
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .io import make_folder, write_cloud
+from .cloud import PointCloud
+from .errors import InvalidParameterError
+from .io import EXPORTERS, export_detections, make_folder, read_cloud, write_cloud
 from .io._detections import write_detections
-from .pipeline import Result
-from .render import BoxDrawing, render_scene
+from .pipeline import Result, detect
+from .render import BoxDrawing, class_color, render_scene
 
-__all__ = ["OutputFiles", "explain", "write_outputs"]
+__all__ = [
+    "LABELLED_FORMATS",
+    "LAS_CLASS_BASE",
+    "LAS_UNCLASSIFIED",
+    "OutputFiles",
+    "check_output_options",
+    "detect_file",
+    "explain",
+    "labelled_cloud",
+    "labelled_comments",
+    "write_outputs",
+]
+
+#: File name of the labelled cloud for each ``labelled_format`` of :func:`write_outputs`.
+LABELLED_FORMATS = {"ply": "labelled.ply", "laz": "labelled.laz", "las": "labelled.las"}
+#: LAS classification code of our first class; ASPRS reserves 0-63 (LAS 1.4, Table 17) and
+#: leaves 64-255 to users, so class ``i`` of ``Result.class_names`` is code ``64 + i``.
+LAS_CLASS_BASE = 64
+#: LAS classification code of points no detection covers (ASPRS 1, "unclassified").
+LAS_UNCLASSIFIED = 1
+#: Grey of the points no detection covers when the input has no colours.
+UNLABELLED_GREY = 128
+#: Share of their own colour the points no detection covers keep (the rest is grey), so
+#: that objects stand out in any viewer while the room stays recognisable.
+UNLABELLED_FADE = 0.5
+#: The names of our per-point fields (CloudCompare loads ``scalar_*`` PLY properties).
+SCALAR_FIELDS = ("scalar_label", "scalar_instance", "scalar_score")
 
 
 @dataclass(frozen=True)
@@ -28,6 +57,90 @@ class OutputFiles:
     detections: Path
     labelled: Path
     picture: Path | None
+    exports: tuple[Path, ...] = ()
+
+
+def _free_name(name: str, taken: set[str]) -> str:
+    """``name``, or ``name_1``, ``name_2``... when the input already has a field so named."""
+    out, k = name, 0
+    while out in taken:
+        k += 1
+        out = f"{name}_{k}"
+    return out
+
+
+def labelled_cloud(result: Result, *, format: str = "ply") -> PointCloud:
+    """The input points coloured by class, with the detector's per-point fields added.
+
+    Parameters
+    ----------
+    result : Result
+        A detection result.
+    format : {"ply", "laz", "las"}
+        The file the cloud is meant for. For PLY the fields are ``scalar_label`` (index
+        into ``result.class_names``, -1 for none), ``scalar_instance`` (detection id, 0 for
+        none) and ``scalar_score`` (the detection's score, 0 for none). For LAS/LAZ the
+        class also goes into ``classification``: ``LAS_CLASS_BASE + index``, or
+        ``LAS_UNCLASSIFIED`` for none; an input ``classification`` is kept as
+        ``input_classification``.
+
+    Returns
+    -------
+    PointCloud
+        Same points and rows as ``result.cloud``; colours by class (the rest in its own
+        colours, faded to grey); the input's colours kept as ``input_red``,
+        ``input_green``, ``input_blue``; every input field kept under its own name (our
+        fields take a ``_1`` suffix when the input already has one so named).
+    """
+    if format not in LABELLED_FORMATS:
+        raise InvalidParameterError("format", f"one of {sorted(LABELLED_FORMATS)}", format)
+    cloud = result.cloud
+    label, instance = result.point_labels()
+    names = result.class_names
+    score = np.zeros(len(cloud), dtype=np.float32)
+    for d in result.detections:
+        score[instance == d.id] = d.score
+    fields = dict(cloud.fields)
+    if format != "ply" and "classification" in fields:
+        fields[_free_name("input_classification", set(fields))] = fields.pop("classification")
+    if cloud.rgb is not None:
+        for i, c in enumerate(("red", "green", "blue")):
+            fields[_free_name(f"input_{c}", set(fields))] = cloud.rgb[:, i]
+        grey = cloud.rgb.astype(np.float64).mean(axis=1, keepdims=True)
+        base = UNLABELLED_FADE * cloud.rgb + (1 - UNLABELLED_FADE) * grey
+    else:
+        base = np.full((len(cloud), 3), UNLABELLED_GREY, dtype=np.float64)
+    palette = np.array([[round(255 * v) for v in class_color(n)] for n in names], np.float64)
+    rgb = np.where((label >= 0)[:, None], palette[np.maximum(label, 0)], base)
+    ours = [label, instance, score]
+    for name, values in zip(SCALAR_FIELDS, ours):
+        fields[_free_name(name, set(fields))] = values
+    if format != "ply":
+        fields["classification"] = np.where(
+            label >= 0, LAS_CLASS_BASE + label, LAS_UNCLASSIFIED
+        ).astype(np.uint8)
+    return cloud.replace(
+        rgb=np.clip(np.round(rgb), 0, 255).astype(np.uint8), fields=fields, normals=None
+    )
+
+
+def labelled_comments(result: Result, cloud: PointCloud) -> list[str]:
+    """Header comments of labelled.ply: which field is which, and the id -> class map."""
+    taken = [n for n in cloud.fields if n.startswith(SCALAR_FIELDS)]
+    lines = [f"ontodetect fields {' '.join(taken)}", "ontodetect label -1 none"]
+    lines += [f"ontodetect label {i} {name}" for i, name in enumerate(result.class_names)]
+    return lines
+
+
+def check_output_options(labelled_format: str, exports: tuple[str, ...]) -> None:
+    """Refuse an unknown labelled format or exporter before any work is done."""
+    if labelled_format not in LABELLED_FORMATS:
+        raise InvalidParameterError(
+            "labelled_format", f"one of {sorted(LABELLED_FORMATS)}", labelled_format
+        )
+    unknown = [n for n in exports if n not in EXPORTERS]
+    if unknown:
+        raise InvalidParameterError("exports", f"among {sorted(EXPORTERS)}", unknown[0])
 
 
 def write_outputs(
@@ -36,23 +149,29 @@ def write_outputs(
     *,
     picture: bool = True,
     title: str | None = None,
+    labelled_format: str = "ply",
+    exports: tuple[str, ...] = ("boxes",),
 ) -> OutputFiles:
-    """Write ``detections.json``, ``labelled.ply`` and ``detections.png`` into ``out_dir``.
+    """Write ``detections.json``, the labelled cloud and ``detections.png`` into ``out_dir``.
 
-    ``labelled.ply`` holds the input points (as read, minus any dropped as NaN)
-    with two fields: ``label`` (index into ``result.class_names``, -1 for none)
-    and ``instance`` (detection id, 0 for none).
+    The labelled cloud (``labelled.ply``, or ``labelled.laz`` / ``labelled.las`` with
+    ``labelled_format``) holds the input points (as read, minus any dropped as NaN)
+    coloured by class, with the fields of :func:`labelled_cloud`; the PLY header names
+    every class id (``comment ontodetect label 0 chair``). ``exports`` names the
+    :data:`ontodetect.io.EXPORTERS` to run beside detections.json (``boxes``: boxes.txt;
+    ``scannet``: the ScanNet benchmark's instance files). docs/outputs.md lists every file.
     """
+    check_output_options(labelled_format, exports)
     out = make_folder(out_dir, "output folder")
     doc = result.to_dict()
     doc["classes"] = result.class_names
     det_path = write_detections(out / "detections.json", doc)
-    label, instance = result.point_labels()
+    exported = export_detections(out, doc, tuple(exports))
+    label, _ = result.point_labels()
     cloud = result.cloud
-    labelled = cloud.replace(
-        fields={**dict(cloud.fields), "label": label, "instance": instance}, normals=None
-    )
-    ply_path = write_cloud(out / "labelled.ply", labelled)
+    labelled = labelled_cloud(result, format=labelled_format)
+    options = {"comments": labelled_comments(result, labelled)} if labelled_format == "ply" else {}
+    ply_path = write_cloud(out / LABELLED_FORMATS[labelled_format], labelled, **options)
     png = None
     if picture:
         names = result.class_names
@@ -76,17 +195,62 @@ def write_outputs(
             legend_counts=counts,
             title=title or f"{src}: {len(result.detections)} objects",
         )
-    return OutputFiles(det_path, ply_path, png)
+    return OutputFiles(det_path, ply_path, png, tuple(exported))
 
 
-def explain(result: Result, *, top: int = 3) -> list[dict[str, Any]]:
+def detect_file(
+    path: str | os.PathLike[str],
+    out_dir: str | os.PathLike[str],
+    *,
+    format: str | None = None,
+    detect_options: dict[str, Any] | None = None,
+    **write_options: Any,
+) -> OutputFiles:
+    """Read one scan, detect, and write its files: one unit of a batch run.
+
+    ``detect_options`` are keyword arguments of :func:`ontodetect.pipeline.detect`
+    (``config``, ``ontology``, ``room``, ``seed``...); ``write_options`` those of
+    :func:`write_outputs`. Picklable arguments in, paths out: any map over scans
+    (``ontodetect.evaluation.map_scenes``, ``detect --jobs``) can run it.
+    """
+    result = detect(read_cloud(path, format=format), **(detect_options or {}))
+    return write_outputs(result, out_dir, **write_options)
+
+
+def explain(
+    result: Result,
+    *,
+    top: int = 3,
+    classes: Sequence[str] | None = None,
+    min_points: int = 0,
+) -> list[dict[str, Any]]:
     """Per cluster: class probabilities, the constraints of the best classes and label costs.
 
     This is what ``detect --explain`` prints (the thesis's Tables 4.2 and 4.9).
+
+    Parameters
+    ----------
+    top : int
+        Classes shown per cluster, most probable first.
+    classes : sequence of str, optional
+        Keep only the clusters labelled with one of these, or whose most probable class
+        (other than none) is one of these.
+    min_points : int
+        Keep only the clusters with at least this many points (most clusters of a real
+        scan are a few points of noise).
     """
+    if isinstance(min_points, bool) or not isinstance(min_points, int) or min_points < 0:
+        raise InvalidParameterError("min_points", "an integer >= 0", min_points)
+    wanted = None if classes is None else set(classes)
     rows = []
     for k, (c, s, choice) in enumerate(zip(result.segmentation, result.scores, result.choices)):
+        if c.num_points < min_points:
+            continue
         ranked = sorted(s.probabilities.items(), key=lambda kv: -kv[1])
+        if wanted is not None:
+            best = next((name for name, _ in ranked if name != "none"), None)
+            if choice.label not in wanted and best not in wanted:
+                continue
         classes = []
         for name, p in ranked[:top]:
             if name == "none":

@@ -54,11 +54,66 @@ def _global_options(
 # Importing a command module registers its command(s) on ``app``. The command modules
 # import the library's stages inside the commands, so that building the CLI (--help,
 # --version) imports none of them.
-from . import cad, calibrate, demo, detect, evaluate, info, segment, synth  # noqa: E402, F401
+from . import cad, calibrate, demo, detect, evaluate, info, segment, synth, view  # noqa: E402, F401
+
+#: Global options that may also be given after the command (``detect ... -q``).
+GLOBAL_FLAGS = frozenset({"-q", "--quiet", "-v", "--verbose"})
+
+
+def hoist_global_options(argv: list[str]) -> list[str]:
+    """Move the global flags given after the command in front of it (up to ``--``).
+
+    Examples
+    --------
+    >>> hoist_global_options(["detect", "a.ply", "-q", "-o", "out"])
+    ['-q', 'detect', 'a.ply', '-o', 'out']
+    >>> hoist_global_options(["detect", "--", "-q"])
+    ['detect', '--', '-q']
+    """
+    end = argv.index("--") if "--" in argv else len(argv)
+    flags = [a for a in argv[:end] if a in GLOBAL_FLAGS]
+    rest = [a for a in argv[:end] if a not in GLOBAL_FLAGS]
+    return [*flags, *rest, *argv[end:]]
+
+
+#: Options whose value may be left out, and the value they then take (``--explain`` alone
+#: explains every class; ``--explain chair,table`` those).
+OPTIONAL_VALUES = {"--explain": "all"}
+
+
+def fill_optional_values(argv: list[str]) -> list[str]:
+    """Give the options of :data:`OPTIONAL_VALUES` their default when no value follows.
+
+    A following token is the option's value unless it starts with ``-`` or looks like a
+    path (holds ``/`` or ``.``); class lists never do.
+
+    Examples
+    --------
+    >>> fill_optional_values(["detect", "a.ply", "--explain", "-o", "out"])
+    ['detect', 'a.ply', '--explain', 'all', '-o', 'out']
+    >>> fill_optional_values(["detect", "--explain", "chair,table", "a.ply"])
+    ['detect', '--explain', 'chair,table', 'a.ply']
+    >>> fill_optional_values(["detect", "--explain", "a.ply"])
+    ['detect', '--explain', 'all', 'a.ply']
+    """
+    out: list[str] = []
+    for k, arg in enumerate(argv):
+        out.append(arg)
+        if arg == "--":
+            return out + argv[k + 1 :]
+        if arg in OPTIONAL_VALUES:
+            nxt = argv[k + 1] if k + 1 < len(argv) else None
+            if nxt is None or nxt.startswith("-") or "/" in nxt or "." in nxt:
+                out.append(OPTIONAL_VALUES[arg])
+    return out
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the CLI; returns the exit status instead of raising ``SystemExit``."""
+    """Run the CLI; returns the exit status instead of raising ``SystemExit``.
+
+    Global options (``-q``, ``-v``) are accepted before or after the command.
+    """
+    argv = fill_optional_values(hoist_global_options(list(sys.argv[1:] if argv is None else argv)))
 
     def _show_warning(message, category, filename, lineno, file=None, line=None):
         err_console.print(f"[yellow]warning:[/] {message}", highlight=False)

@@ -16,8 +16,23 @@ from .._progress import use_reporter
 
 __all__ = ["RichReporter", "console", "err_console", "reporting", "setup_output", "state"]
 
-console = Console(highlight=False)
-err_console = Console(stderr=True, highlight=False)
+#: Line width when the output is not a terminal: long enough never to wrap (file names
+#: and JSON stay on one line for grep and pipes).
+PIPE_WIDTH = 100_000
+
+
+def _console(stderr: bool = False) -> Console:
+    """A console that wraps and colours for a terminal, and neither for a pipe or a file."""
+    c = Console(stderr=stderr, highlight=False)
+    if c.is_terminal:
+        return c
+    return Console(
+        stderr=stderr, highlight=False, width=PIPE_WIDTH, soft_wrap=True, color_system=None
+    )
+
+
+console = _console()
+err_console = _console(stderr=True)
 
 
 class _State:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import json
 from pathlib import Path
 
@@ -9,7 +10,9 @@ import typer
 from rich.table import Table
 
 from ..cloud import as_position
-from ..io import read_cloud
+from ..errors import OntoDetectError
+from ..geometry import jsonable
+from ..io import expand_inputs, read_cloud
 from . import app
 from ._common import load_config, load_ontology_option, number_list, room_option
 from ._console import console, reporting, state
@@ -17,8 +20,14 @@ from ._console import console, reporting, state
 
 @app.command()
 def detect(
-    path: Path = typer.Argument(..., help="Point cloud file or scan folder."),
+    paths: list[Path] = typer.Argument(
+        ...,
+        metavar="INPUT...",
+        help="Point cloud files, scan folders, folders of scans or quoted glob patterns "
+        "('scans/*.ply'); with more than one scan, each gets OUT/<name>/.",
+    ),
     out: Path = typer.Option(..., "--out", "-o", help="Output folder."),
+    jobs: int = typer.Option(1, "--jobs", "-j", help="Scans in parallel (0: one per CPU)."),
     format: str | None = typer.Option(None, "--format", "-f", help="Force the input format."),
     config: Path | None = typer.Option(None, "--config", "-c", help="Configuration YAML."),
     set_: list[str] = typer.Option(
@@ -68,10 +77,40 @@ def detect(
         "(detect.votes, default 3; 1: one pass, about half the time).",
     ),
     seed: int = typer.Option(0, "--seed", help="Seed of every random step."),
-    explain_: bool = typer.Option(
-        False, "--explain", help="Print every constraint's probability and the label costs."
+    explain_: str | None = typer.Option(
+        None,
+        "--explain",
+        metavar="[CLASSES]",
+        help="Print every constraint's probability and the label costs, for every cluster "
+        "or those of CLASSES (comma-separated: --explain chair,table); with --json, as "
+        "'explain' in the document.",
+    ),
+    min_points: int = typer.Option(
+        10,
+        "--min-points",
+        help="With --explain: leave out clusters with fewer points (one-point noise).",
     ),
     picture: bool = typer.Option(True, "--picture/--no-picture", help="Write detections.png."),
+    as_json: bool = typer.Option(
+        False,
+        "--json",
+        help="Print the detections.json document (with 'files': what was written) on stdout "
+        "instead of the table.",
+    ),
+    labelled_format: str = typer.Option(
+        "ply",
+        "--labelled-format",
+        help="Labelled cloud: ply (labelled.ply) or laz/las (labelled.laz, ASPRS "
+        "classification codes from 64 up; docs/outputs.md).",
+    ),
+    export: str = typer.Option(
+        "boxes",
+        "--export",
+        metavar="NAMES",
+        help="Comma-separated exports beside detections.json: boxes (boxes.txt, "
+        "OpenPCDet/mmdetection3d layout), scannet (ScanNet benchmark instance files); "
+        "'' for none.",
+    ),
     cad: bool = typer.Option(
         False,
         "--cad",
@@ -79,10 +118,15 @@ def detect(
         "(object_map.ply, object_map.glb) and add 'cad' to detections.json.",
     ),
 ) -> None:
-    """Detect objects; write detections.json, labelled.ply and detections.png."""
-    from ..outputs import write_outputs  # lazy: CLI start-up
+    """Detect objects; write detections.json, labelled.ply, boxes.txt and detections.png."""
+    from ..outputs import check_output_options, explain, write_outputs  # lazy: CLI start-up
     from ..pipeline import detect as run_detect  # lazy: CLI start-up
 
+    exports = tuple(n.strip() for n in export.split(",") if n.strip())
+    explain_classes = None
+    if explain_ is not None and explain_ != "all":
+        explain_classes = [n.strip() for n in explain_.split(",") if n.strip()]
+    check_output_options(labelled_format.lower(), exports)
     cfg = load_config(
         config,
         set_,
@@ -98,6 +142,30 @@ def detect(
     eye = number_list(viewpoint, float, "--viewpoint")
     if eye is not None:
         eye = as_position(eye, "--viewpoint")
+    inputs = expand_inputs(paths)
+    if len(inputs) > 1 or inputs[0] not in paths:
+        if cad or explain_ is not None:
+            raise typer.BadParameter("--cad and --explain take one scan", param_hint="INPUT...")
+        _detect_many(
+            inputs,
+            out,
+            jobs=jobs,
+            as_json=as_json,
+            format=format,
+            detect_options={
+                "config": cfg,
+                "ontology": onto,
+                "room": room_arg,
+                "indoor": indoor,
+                "seed": seed,
+                "viewpoint": eye,
+            },
+            picture=picture,
+            labelled_format=labelled_format.lower(),
+            exports=exports,
+        )
+        return
+    path = inputs[0]
     with reporting():
         cloud = read_cloud(path, format=format)
         result = run_detect(
@@ -116,11 +184,29 @@ def detect(
 
             fits = fit_detections(result, seed=seed, ontology=onto)
             result = with_cad(result, fits)
-        files = write_outputs(result, out, picture=picture)
+        files = write_outputs(
+            result,
+            out,
+            picture=picture,
+            labelled_format=labelled_format.lower(),
+            exports=exports,
+        )
         if cad:
             object_map = write_object_map(fits, out, seed=seed)
-    if explain_:
-        _print_explain(result)
+    if as_json:
+        doc = result.to_dict()
+        doc["classes"] = result.class_names
+        doc["files"] = [
+            str(p)
+            for p in (files.detections, files.labelled, *files.exports, files.picture)
+            if p is not None
+        ] + (["object_map.ply", "object_map.glb"] if object_map is not None else [])
+        if explain_ is not None:
+            doc["explain"] = explain(result, classes=explain_classes, min_points=min_points)
+        typer.echo(json.dumps(jsonable(doc)))
+        return
+    if explain_ is not None:
+        _print_explain(explain(result, classes=explain_classes, min_points=min_points))
     if state.quiet:
         return
     table = Table(
@@ -140,6 +226,7 @@ def detect(
     console.print(table)
     console.print(
         f"wrote {files.detections}, {files.labelled}"
+        + "".join(f", {p}" for p in files.exports)
         + (f", {files.picture}" if files.picture else "")
         + (", object_map.ply, object_map.glb" if object_map is not None else "")
     )
@@ -147,10 +234,66 @@ def detect(
         console.print(json.dumps(result.to_dict()["timings"]))
 
 
-def _print_explain(result) -> None:
-    from ..outputs import explain  # lazy: CLI start-up
+def _scan_names(inputs: list[Path]) -> list[str]:
+    """A folder name per scan: its stem, made unique with ``_2``, ``_3``..."""
+    names: list[str] = []
+    for p in inputs:
+        stem = p.name[: -len("_vert.npy")] if p.name.endswith("_vert.npy") else p.stem
+        name, k = stem or "scan", 1
+        while name in names:
+            k += 1
+            name = f"{stem}_{k}"
+        names.append(name)
+    return names
 
-    for row in explain(result):
+
+def _detect_unit(unit: tuple[Path, Path], format, detect_options, write_options) -> dict:
+    """One scan of a batch (module level: picklable for worker processes)."""
+    from ..outputs import detect_file  # lazy: CLI start-up
+
+    path, folder = unit
+    try:
+        files = detect_file(
+            path, folder, format=format, detect_options=detect_options, **write_options
+        )
+    except OntoDetectError as exc:
+        return {"input": str(path), "out": str(folder), "error": str(exc)}
+    doc = json.loads(files.detections.read_text(encoding="utf-8"))
+    return {
+        "input": str(path),
+        "out": str(folder),
+        "objects": len(doc["detections"]),
+        "labels": sorted({d["label"] for d in doc["detections"]}),
+    }
+
+
+def _detect_many(inputs, out, *, jobs, as_json, format, detect_options, **write_options):
+    from ..evaluation import map_scenes  # lazy: CLI start-up
+
+    units = [(p, out / name) for p, name in zip(inputs, _scan_names(inputs))]
+    fn = functools.partial(
+        _detect_unit, format=format, detect_options=detect_options, write_options=write_options
+    )
+    with reporting():
+        rows = map_scenes(fn, units, jobs=jobs, description="Scans")
+    failed = [r for r in rows if "error" in r]
+    if as_json:
+        typer.echo(json.dumps(rows))
+    elif not state.quiet:
+        table = Table(title=f"{len(rows)} scans -> {out}")
+        for col in ("input", "objects", "output"):
+            table.add_column(col, justify="right" if col == "objects" else "left")
+        for r in rows:
+            table.add_row(r["input"], str(r.get("objects", "failed")), r["out"])
+        console.print(table)
+    for r in failed:
+        console.print(f"[red]failed[/] {r['input']}: {r['error']}")
+    if failed:
+        raise typer.Exit(2)
+
+
+def _print_explain(rows) -> None:
+    for row in rows:
         head = (
             f"cluster {row['cluster']}: {row['num_points']} points, {row['planes']} planes"
             f" -> {row['label'] or 'no label'}" + (f" ({row['reason']})" if row["reason"] else "")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import typer
@@ -42,6 +43,9 @@ def eval_(
     jobs: int = typer.Option(1, "--jobs", "-j", help="Scenes in parallel (0: one per CPU)."),
     skip_failed: bool = typer.Option(
         False, "--skip-failed", help="Leave out scenes that cannot be read, and list them."
+    ),
+    as_json: bool = typer.Option(
+        False, "--json", help="Print the report.json document on stdout instead of the tables."
     ),
     config: Path | None = typer.Option(None, "--config", "-c", help="Configuration YAML."),
     set_: list[str] = typer.Option(
@@ -96,7 +100,7 @@ def eval_(
 ) -> None:
     """Evaluate detection on a labelled dataset: P, R, F1, AP per class, confusion, times."""
     from ..evaluation import evaluate_dataset, write_report  # lazy: CLI start-up
-    from ..evaluation._report import CRITERION_NAMES  # lazy: CLI start-up
+    from ..evaluation._report import CRITERION_NAMES, report_document  # lazy: CLI start-up
 
     cfg = load_config(
         config,
@@ -131,6 +135,9 @@ def eval_(
             seeds=seed_list,
         )
         files = write_report(result, out) if out is not None else None
+    if as_json:
+        typer.echo(json.dumps(report_document(result), ensure_ascii=False))
+        return
     if state.quiet:
         return
     ev = result.primary
@@ -165,6 +172,11 @@ def eval_(
         m = result.evaluations[key].overall
         console.print(
             f"{CRITERION_NAMES[key]}: precision {_pct(m.precision)} %, recall {_pct(m.recall)} %"
+        )
+    for key, ap in result.box_ap.items():
+        console.print(
+            f"box AP {key}: "
+            + ", ".join(f"{c} {'-' if v != v else _pct(v)}" for c, v in ap.items())
         )
     t = result.scene_seconds()
     console.print(

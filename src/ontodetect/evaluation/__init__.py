@@ -15,6 +15,13 @@ Calibration, which uses these, is its own stage: :mod:`ontodetect.calibrate`.
 
 from __future__ import annotations
 
+from ._boxes import (
+    BOX_IOU_THRESHOLDS,
+    BoxInstance,
+    box_average_precision,
+    box_iou,
+    boxes_from_instances,
+)
 from ._dataset import (
     CRITERIA,
     DATASET_FORMATS,
@@ -30,6 +37,7 @@ from ._dataset import (
     load_scene,
     map_scenes,
     read_scene_detections,
+    scene_boxes,
     scene_group,
     summarize_outcomes,
     turn_cloud,
@@ -54,10 +62,12 @@ from ._metrics import (
 from ._report import ReportFiles, literature_comparisons, markdown_report, write_report
 
 __all__ = [
+    "BOX_IOU_THRESHOLDS",
     "CRITERIA",
     "DATASET_FORMATS",
     "DISTANCE_THRESHOLDS",
     "NYU40_CLASSES",
+    "BoxInstance",
     "ClassMetrics",
     "DatasetEvaluation",
     "Evaluation",
@@ -70,6 +80,9 @@ __all__ = [
     "SceneResult",
     "SceneSource",
     "average_precision",
+    "box_average_precision",
+    "box_iou",
+    "boxes_from_instances",
     "discover_scenes",
     "evaluate_dataset",
     "evaluate_scene",
@@ -84,6 +97,7 @@ __all__ = [
     "overlap_matrix",
     "precision_recall_curve",
     "read_scene_detections",
+    "scene_boxes",
     "scene_group",
     "summarize_outcomes",
     "turn_cloud",

@@ -57,6 +57,7 @@ from ..ontology import builtin_ontology
 from ..pipeline import detect
 from ..synth import load_synth
 from ..synth.scene import CLASS_IDS
+from ._boxes import BOX_IOU_THRESHOLDS, BoxInstance, box_average_precision, boxes_from_instances
 from ._match import Instance, instances_from_labels
 from ._metrics import Evaluation, SceneResult, evaluate_scenes
 
@@ -75,6 +76,7 @@ __all__ = [
     "load_scene",
     "map_scenes",
     "read_scene_detections",
+    "scene_boxes",
     "scene_group",
     "summarize_outcomes",
     "turn_cloud",
@@ -155,6 +157,7 @@ class LoadedScene:
     source: SceneSource
     cloud: PointCloud
     gts: list[Instance]
+    gt_boxes: list[BoxInstance] = field(default_factory=list)
 
     @property
     def num_points(self) -> int:
@@ -166,7 +169,9 @@ def read_scene_cloud(source: SceneSource) -> PointCloud:
     """The scene's points with per-point ``instance`` and ``class_id`` fields."""
     path = Path(source.path)
     if source.format == "ontodetect":
-        cloud, _, _ = load_synth(path)
+        cloud, objects, _ = load_synth(path)
+        # The objects' oriented boxes are the simulator's ground-truth boxes (box AP).
+        cloud = cloud.with_meta(boxes=objects)
     else:
         cloud = read_cloud(path, format=source.format)
     missing = [k for k in ("instance", "class_id") if k not in cloud.fields]
@@ -226,18 +231,55 @@ def load_scene(
         xyz=cloud.xyz,
         index=cloud.index,
     )
-    return LoadedScene(source, cloud, gts)
+    return LoadedScene(source, cloud, gts, scene_boxes(cloud, gts, class_ids, turn=turn))
+
+
+def scene_boxes(
+    cloud: PointCloud,
+    gts: Sequence[Instance],
+    class_ids: Mapping[int, str],
+    *,
+    turn: float = 0.0,
+) -> list[BoxInstance]:
+    """The ground-truth boxes of a scene, for box AP.
+
+    The boxes the dataset carries (``meta["boxes"]``: VoteNet's ScanNet ``*_bbox.npy``,
+    axis-aligned; the simulator's objects.json, oriented), turned with the scan by
+    ``turn`` degrees; without them, the axis-aligned box around each instance's points.
+    """
+    given = cloud.meta.get("boxes")
+    if given is None:
+        out = []
+        for g in gts:
+            xyz = cloud.xyz[np.isin(cloud.index, g.points)]
+            if len(xyz):
+                lo, hi = xyz.min(axis=0), xyz.max(axis=0)
+                out.append(BoxInstance.make(g.label, (lo + hi) / 2, hi - lo))
+        return out
+    boxes = boxes_from_instances(given, class_ids)
+    if not turn:
+        return boxes
+    rot = yaw_pose(0.0, 0.0, math.radians(turn))[:3, :3]
+    return [
+        BoxInstance.make(b.label, rot @ b.center, b.size, b.yaw + math.radians(turn)) for b in boxes
+    ]
 
 
 def read_scene_detections(
-    detections_dir: str | os.PathLike[str], scene: str, num_points: int | None = None
-) -> list[Instance]:
+    detections_dir: str | os.PathLike[str],
+    scene: str,
+    num_points: int | None = None,
+    *,
+    boxes: bool = False,
+) -> list[Instance] | tuple[list[Instance], list[BoxInstance]]:
     """Stored detections of one scene, ``<detections_dir>/<scene>/detections.json``.
 
     Parameters
     ----------
     num_points : int, optional
         Rows of the scene's input file; a document written for another scan is refused.
+    boxes : bool
+        Also return the detections' boxes (for box AP).
     """
     path = Path(detections_dir) / scene / "detections.json"
     doc = read_detections(path)
@@ -247,9 +289,17 @@ def read_scene_detections(
             f"num_points is {doc['num_points']}, but scene {scene} has {num_points} points: "
             "these detections belong to another scan",
         )
-    return [
+    preds = [
         Instance.make(
             d["id"], d["label"], d["point_indices"], float(d["score"]), d["box"]["center"]
+        )
+        for d in doc["detections"]
+    ]
+    if not boxes:
+        return preds
+    return preds, [
+        BoxInstance.make(
+            d["label"], d["box"]["center"], d["box"]["size"], d["box"]["yaw"], d["score"]
         )
         for d in doc["detections"]
     ]
@@ -280,6 +330,8 @@ class SceneOutcome:
         Degrees the scan was turned by (see :func:`evaluate_dataset`'s ``turns``).
     seed : int or None
         The seed of this run (see :func:`evaluate_dataset`'s ``seeds``).
+    pred_boxes, gt_boxes : tuple of BoxInstance
+        The detections' boxes and the ground-truth boxes (:func:`scene_boxes`), for box AP.
     """
 
     name: str
@@ -293,6 +345,8 @@ class SceneOutcome:
     error: str | None = None
     turn: float | None = None
     seed: int | None = None
+    pred_boxes: tuple[BoxInstance, ...] = ()
+    gt_boxes: tuple[BoxInstance, ...] = ()
 
     @property
     def ok(self) -> bool:
@@ -390,7 +444,9 @@ def evaluate_scene(
     try:
         scene = load_scene(source, class_ids, turn=turn)
         if detections_dir is not None:
-            preds = read_scene_detections(detections_dir, source.name, scene.num_points)
+            preds, pred_boxes = read_scene_detections(
+                detections_dir, source.name, scene.num_points, boxes=True
+            )
             load = time.perf_counter() - t0
             seconds, timings = 0.0, {}
         else:
@@ -401,6 +457,10 @@ def evaluate_scene(
             timings = dict(result.timings)
             preds = [
                 Instance.make(d.id, d.label, d.point_indices, d.score, d.center)
+                for d in result.detections
+            ]
+            pred_boxes = [
+                BoxInstance.make(d.label, d.center, d.size, d.yaw, d.score)
                 for d in result.detections
             ]
             if save_dir is not None:
@@ -416,6 +476,8 @@ def evaluate_scene(
         seconds,
         load,
         timings,
+        pred_boxes=tuple(pred_boxes),
+        gt_boxes=tuple(scene.gt_boxes),
     )
 
 
@@ -533,6 +595,10 @@ class DatasetEvaluation:
         Worker processes used.
     seconds : float
         Wall time of the whole evaluation.
+    box_ap : dict of str to dict of str to float
+        Box AP per class and ``"mean"`` (:func:`box_average_precision`) under the keys
+        ``"aligned@0.25"``, ``"aligned@0.5"``, ``"oriented@0.25"``, ``"oriented@0.5"``,
+        pooled over every scene like ``evaluations``.
     by_variant : dict of str to Evaluation
         When scans were turned or run with several seeds (:func:`evaluate_dataset`'s
         ``turns`` and ``seeds``): the evaluation at point IoU >= 0.25 of each turn
@@ -549,6 +615,7 @@ class DatasetEvaluation:
     jobs: int = 1
     seconds: float = 0.0
     by_variant: dict[str, Evaluation] = field(default_factory=dict)
+    box_ap: dict[str, dict[str, float]] = field(default_factory=dict)
 
     @property
     def primary(self) -> Evaluation:
@@ -577,6 +644,10 @@ class DatasetEvaluation:
             "seconds": round(self.seconds, 3),
             "scene_seconds": {k: round(v, 3) for k, v in self.scene_seconds().items()},
             "evaluations": {k: e.to_dict() for k, e in self.evaluations.items()},
+            "box_ap": {
+                k: {c: (None if math.isnan(v) else round(v, 4)) for c, v in ap.items()}
+                for k, ap in self.box_ap.items()
+            },
             "scenes": [s.to_dict() for s in self.scenes],
             "failed": [s.to_dict() for s in self.failed],
             "by_variant": {
@@ -616,6 +687,14 @@ def summarize_outcomes(
         key: evaluate_scenes(rs, classes, criterion=crit, iou_threshold=thr)
         for key, rs in groups.items()
     }
+    pairs = [(o.pred_boxes, o.gt_boxes) for o in ok]
+    box_ap = {
+        f"{kind}@{thr:g}": box_average_precision(
+            pairs, classes, iou_threshold=thr, oriented=kind == "oriented"
+        )
+        for kind in ("aligned", "oriented")
+        for thr in BOX_IOU_THRESHOLDS
+    }
     return DatasetEvaluation(
         str(dataset),
         list(classes),
@@ -626,6 +705,7 @@ def summarize_outcomes(
         jobs,
         seconds,
         by_variant,
+        box_ap,
     )
 
 

@@ -31,7 +31,13 @@ from ._dataset import CRITERIA, PRIMARY, DatasetEvaluation
 from ._match import DISTANCE_THRESHOLDS
 from ._metrics import ClassMetrics, Evaluation
 
-__all__ = ["ReportFiles", "literature_comparisons", "markdown_report", "write_report"]
+__all__ = [
+    "ReportFiles",
+    "box_ap_table",
+    "literature_comparisons",
+    "markdown_report",
+    "write_report",
+]
 
 #: Format tag of ``data/literature.yaml``.
 LITERATURE_FORMAT = "ontodetect.literature/1"
@@ -134,6 +140,22 @@ def _class_table(ev: Evaluation) -> list[str]:
     rows = [_metric_row(ev.per_class[c]) for c in ev.classes]
     rows.append(_metric_row(ev.overall, bold=True))
     return _table(header, rows)
+
+
+def box_ap_table(evaluation: DatasetEvaluation) -> list[str]:
+    """Box AP % per class and mean, one column per IoU kind and threshold."""
+    keys = list(evaluation.box_ap)
+    if not keys:
+        return ["(no box AP)"]
+    names = [*evaluation.classes, "mean"]
+    rows = []
+    for c in names:
+        cells = []
+        for k in keys:
+            v = evaluation.box_ap[k].get(c, float("nan"))
+            cells.append("-" if v != v else _pct(v))
+        rows.append([f"**{c}**" if c == "mean" else c, *cells])
+    return _table(["class", *(f"AP {k} %" for k in keys)], rows)
 
 
 def _variant_table(evaluation: DatasetEvaluation) -> list[str]:
@@ -322,6 +344,15 @@ def markdown_report(evaluation: DatasetEvaluation) -> str:
         *_class_table(ev),
         "",
         *_variant_section(evaluation),
+        "## Box AP",
+        "",
+        "Average precision of the detections' boxes against the ground-truth boxes the "
+        "dataset carries (VoteNet's ScanNet `*_bbox.npy`, the simulator's objects.json; "
+        "otherwise the box around each instance's points), at 3D IoU ≥ 0.25 and ≥ 0.5, "
+        "axis-aligned (VoteNet's protocol) and oriented.",
+        "",
+        *box_ap_table(evaluation),
+        "",
         "## Every criterion",
         "",
         f"Point IoU ≥ 0.25 and ≥ 0.5, and the centre distance of Günther et al. "

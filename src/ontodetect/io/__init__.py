@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import importlib
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -31,11 +31,21 @@ from ._detections import (
     validate_detections,
     write_detections,
 )
+from ._exports import (
+    EXPORTERS,
+    export_detections,
+    read_box_table,
+    read_scannet_instances,
+    write_box_table,
+    write_scannet_instances,
+)
+from ._inputs import expand_inputs as _expand_inputs
 from ._layouts import DATASET_FORMATS
 
 __all__ = [
     "DATASET_FORMATS",
     "DETECTIONS_FORMAT",
+    "EXPORTERS",
     "FORMATS",
     "READERS",
     "WRITERS",
@@ -45,13 +55,19 @@ __all__ = [
     "atomic_write_text",
     "detect_format",
     "detections_schema",
+    "expand_inputs",
+    "export_detections",
     "make_folder",
+    "read_box_table",
     "read_cloud",
     "read_detections",
+    "read_scannet_instances",
     "supported_formats",
     "validate_detections",
+    "write_box_table",
     "write_cloud",
     "write_detections",
+    "write_scannet_instances",
 ]
 
 
@@ -188,6 +204,16 @@ class _Registry(dict):
 READERS: dict[str, Callable[..., PointCloud]] = _Registry("reader")
 #: Format name -> writer ``fn(path, cloud, **options) -> Path``.
 WRITERS: dict[str, Callable[..., Path]] = _Registry("writer")
+
+
+def expand_inputs(paths: Iterable[str | os.PathLike[str]]) -> list[Path]:
+    """The scans that paths, folders of scans and glob patterns name, in order, each once.
+
+    A file or a folder that is one scan (ScanNet, S3DIS, 3DTK) is itself; any other folder
+    stands for the readable files in it, sorted; a path that does not exist but holds
+    ``*``, ``?`` or ``[`` is a glob pattern.
+    """
+    return _expand_inputs(paths, detect_format)
 
 
 def supported_formats(kind: str = "read") -> list[str]:

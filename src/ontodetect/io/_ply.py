@@ -1030,7 +1030,12 @@ def write_atomically(path: Path, write: Callable[[IO[bytes]], None]) -> Path:
 
 
 def write_ply(
-    path: Path, cloud: PointCloud, *, ascii: bool = False, dtype: Any = "float64"
+    path: Path,
+    cloud: PointCloud,
+    *,
+    ascii: bool = False,
+    dtype: Any = "float64",
+    comments: Sequence[str] = (),
 ) -> Path:
     """Write a cloud as a PLY file (binary little-endian unless ``ascii``), atomically.
 
@@ -1047,6 +1052,9 @@ def write_ply(
         Write text instead of binary (for small files one wants to read).
     dtype : {"float64", "float32"}
         Type of the coordinates and normals.
+    comments : sequence of str
+        Header comment lines (one ``comment`` line each, after ``written by ontodetect``);
+        a line may not hold a line break.
 
     Returns
     -------
@@ -1086,10 +1094,14 @@ def write_ply(
         path, cloud.fields, allow_64bit=False, taken=[name for name, _, _ in columns]
     )
     n = len(cloud)
+    for text in comments:
+        if not isinstance(text, str) or any(c in text for c in "\r\n") or not text.isascii():
+            raise WriteError(path, f"header comment {text!r}: expected one line of ASCII text")
     lines = [
         "ply",
         f"format {'ascii' if ascii else 'binary_little_endian'} 1.0",
         "comment written by ontodetect",
+        *(f"comment {text}" for text in comments),
         f"element vertex {n}",
     ]
     lines += [f"property {_PLY_NAMES[kind.str[1:]]} {name}" for name, kind, _ in columns]

@@ -1,4 +1,5 @@
-"""Pictures of scans and results: a top view and a perspective view, drawn with Matplotlib.
+"""Pictures of scans and results: a top view and a perspective view, drawn with Matplotlib,
+and ``view.html``, a self-contained page to turn a result around in a browser.
 
 Objects are coloured by class and outlined by their oriented boxes; the rest of
 the scan is drawn in its own colours, faded, so that the objects stand out.
@@ -9,5 +10,16 @@ from __future__ import annotations
 
 from ..geometry import box_corners
 from ._scene import CLASS_COLORS, MAX_POINTS, BoxDrawing, class_color, render_scene
+from ._viewer import VIEWER_MAX_POINTS, viewer_html, write_viewer
 
-__all__ = ["CLASS_COLORS", "MAX_POINTS", "BoxDrawing", "box_corners", "class_color", "render_scene"]
+__all__ = [
+    "CLASS_COLORS",
+    "MAX_POINTS",
+    "VIEWER_MAX_POINTS",
+    "BoxDrawing",
+    "box_corners",
+    "class_color",
+    "render_scene",
+    "viewer_html",
+    "write_viewer",
+]
