@@ -58,6 +58,7 @@ from benchmarks._generalization import (
 )
 from ontodetect import __version__
 from ontodetect.cloud import DataWarning
+from ontodetect.config import Config
 from ontodetect.errors import OntoDetectError
 from ontodetect.evaluation import (
     DatasetEvaluation,
@@ -625,6 +626,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--quick", action="store_true", help="a small smoke run")
     ap.add_argument("--seed", type=int, default=0, help="seed of detection (default 0)")
     ap.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="a configuration value for detection, e.g. detect.proposals=recognition (repeatable)",
+    )
+    ap.add_argument(
         "--source",
         choices=("furnished", "parametric"),
         default="furnished",
@@ -654,7 +663,9 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
     out: Path = args.out
     out.mkdir(parents=True, exist_ok=True)
     jobs = args.jobs
-    opts = {"seed": args.seed}
+    opts: dict[str, Any] = {"seed": args.seed}
+    if args.overrides:
+        opts["config"] = Config().with_overrides(args.overrides)
     source = room_source(args.source)
     reporter = RichReporter() if err.is_terminal else None
     doc: dict[str, Any] = {
@@ -663,6 +674,7 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
         "quick": bool(args.quick),
         "jobs": jobs,
         "seed": args.seed,
+        "overrides": list(args.overrides),
         "scene_source": dataclasses.asdict(source),
     }
     console.print(

@@ -67,6 +67,12 @@ def detect(
         help="Passes over the scan, a majority keeps a detection "
         "(detect.votes, default 3; 1: one pass, about half the time).",
     ),
+    proposals: str | None = typer.Option(
+        None,
+        "--proposals",
+        help="Object proposals: vote (default) or recognition (issue 20, opt-in; "
+        "detect.proposals).",
+    ),
     seed: int = typer.Option(0, "--seed", help="Seed of every random step."),
     explain_: bool = typer.Option(
         False, "--explain", help="Print every constraint's probability and the label costs."
@@ -92,6 +98,7 @@ def detect(
         beta=beta,
         context=context,
         votes=votes,
+        proposals=proposals,
     )
     onto = load_ontology_option(ontology, ontology_only)
     room_arg = room_option(room, room_probs)
