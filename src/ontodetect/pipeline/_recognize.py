@@ -34,6 +34,10 @@ __all__ = ["Candidate", "candidate_gain", "recognize"]
 
 #: Probabilities are floored here before their logarithm.
 MIN_PROBABILITY = 1e-12
+#: A candidate's log-odds count in the selection times its surface (m²) to this power:
+#: with plain log-odds (power 0) a chair cut in three plausible pieces outweighs the
+#: whole chair; with power 1, two chairs side by side as one sofa outweigh the two.
+SIZE_POWER = 0.5
 
 
 @dataclass(frozen=True)
@@ -47,7 +51,8 @@ class Candidate:
     label : str or None
         Its most likely label (None: "none" is likelier than any label at the threshold).
     gain : float
-        Log-odds of that label against "none".
+        Its weight in the selection: the log-odds of that label against "none" times its
+        surface to the power ``SIZE_POWER``.
     num_voxels : int
     chosen : bool
     beaten_by : int or None
@@ -135,6 +140,7 @@ def recognize(
     t0 = time.perf_counter()
     best = [candidate_gain(s.probabilities, ontology, d.threshold) for s in all_scores]
     gains = np.array([g for _, g in best], dtype=np.float64)
+    gains *= np.array([c.surface for c in clusters]) ** SIZE_POWER
     pairs = conflicts([c.voxels for c in clusters])
     chosen, _ = select_candidates(gains, pairs)
     keep = np.flatnonzero(chosen)
@@ -208,9 +214,9 @@ def explain_candidates(candidates: Sequence[Candidate], keep_index: Sequence[int
     lines = []
     for k in keep_index:
         c = candidates[k]
-        lines.append(f"candidate {k} ({c.source}, {c.label}, log-odds {c.gain:.2f}) beat:")
+        lines.append(f"candidate {k} ({c.source}, {c.label}, weight {c.gain:.2f}) beat:")
         for j, o in enumerate(candidates):
             if o.beaten_by == k:
-                why = "no label" if o.label is None else f"{o.label}, log-odds {o.gain:.2f}"
+                why = "no label" if o.label is None else f"{o.label}, weight {o.gain:.2f}"
                 lines.append(f"  {j} ({o.source}, {o.num_voxels} voxels): {why}")
     return lines
