@@ -14,6 +14,7 @@ from ontodetect.errors import OntoDetectError
 from ontodetect.geometry import _mesh as M
 from ontodetect.labeling import conflicts, select_candidates
 from ontodetect.ontology import builtin_ontology, class_priors
+from ontodetect.outputs import explain
 from ontodetect.pipeline import detect
 from ontodetect.pipeline._recognize import candidate_gain, explain_candidates, recognize
 from ontodetect.segment import GENERATORS, felzenszwalb, oversegment, propose, segment
@@ -238,3 +239,6 @@ def test_recognition_finds_the_tiny_room():
     )
     assert sorted(d.label for d in result.detections) == ["chair", "table"]
     assert "select" in result.timings
+    rows = explain(result)
+    assert all("beat" in row for row in rows) and any(row["beat"] for row in rows)
+    assert sum(c.chosen for c in result.candidates) == len(result.segmentation)

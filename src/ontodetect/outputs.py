@@ -85,6 +85,8 @@ def explain(result: Result, *, top: int = 3) -> list[dict[str, Any]]:
     This is what ``detect --explain`` prints (the thesis's Tables 4.2 and 4.9).
     """
     rows = []
+    cands = result.candidates
+    origin = {c.cluster: i for i, c in enumerate(cands) if c.cluster is not None}
     for k, (c, s, choice) in enumerate(zip(result.segmentation, result.scores, result.choices)):
         ranked = sorted(s.probabilities.items(), key=lambda kv: -kv[1])
         classes = []
@@ -127,4 +129,15 @@ def explain(result: Result, *, top: int = 3) -> list[dict[str, Any]]:
                 "classes": classes,
             }
         )
+        if k in origin:  # segmentation by recognition: the candidates this one beat
+            rows[-1]["beat"] = [
+                {
+                    "source": o.source,
+                    "label": o.label,
+                    "weight": o.gain,
+                    "num_voxels": o.num_voxels,
+                }
+                for o in cands
+                if o.beaten_by == origin[k]
+            ]
     return rows

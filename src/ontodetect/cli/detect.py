@@ -163,6 +163,9 @@ def _print_explain(result) -> None:
             f" -> {row['label'] or 'no label'}" + (f" ({row['reason']})" if row["reason"] else "")
         )
         console.print(f"[bold]{head}[/]")
+        for o in row.get("beat", []):
+            why = "no label" if o["label"] is None else f"{o['label']}, weight {o['weight']:.2f}"
+            console.print(f"  beat a candidate of {o['source']} ({o['num_voxels']} voxels): {why}")
         probs = Table(show_header=True, box=None, pad_edge=False)
         probs.add_column("class")
         probs.add_column("P_obj|ont", justify="right")

@@ -173,7 +173,7 @@ def _recognition_result(
     t0 = time.perf_counter()
     scan = smooth_depth(cloud) if config.prepare.depth_smoothing else cloud
     before = time.perf_counter() - t0
-    seg, scores, choices, found, timings, _ = recognize(
+    seg, scores, choices, found, timings, candidates = recognize(
         scan, config, ontology, priors, seed=seed, viewpoint=eye, ground=None
     )
     timings["segment"] += before
@@ -188,6 +188,7 @@ def _recognition_result(
         ontology=ontology,
         priors=dict(priors),
         timings=timings,
+        candidates=candidates,
     )
 
 

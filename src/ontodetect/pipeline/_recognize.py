@@ -57,6 +57,8 @@ class Candidate:
     chosen : bool
     beaten_by : int or None
         The chosen candidate it conflicts with (index into the candidates), if any.
+    cluster : int or None
+        Its cluster in the result's segmentation when chosen.
     """
 
     source: str
@@ -65,6 +67,7 @@ class Candidate:
     num_voxels: int
     chosen: bool
     beaten_by: int | None
+    cluster: int | None = None
 
 
 def candidate_gain(
@@ -161,6 +164,7 @@ def recognize(
             len(clusters[k].voxels),
             k in new_id,
             beaten.get(k),
+            new_id.get(k),
         )
         for k in range(len(clusters))
     ]
