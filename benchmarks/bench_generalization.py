@@ -425,12 +425,20 @@ def stability_unit(
 
 
 def stability(
-    scans: Sequence[SceneSource], turns: Sequence[float], jobs: int, seed: int
+    scans: Sequence[SceneSource],
+    turns: Sequence[float],
+    jobs: int,
+    seed: int,
+    config: Config | None = None,
 ) -> dict[str, Any]:
-    """Share of reference detections that reappear, per transform and scan."""
+    """Share of reference detections that reappear, per transform and scan (detected with
+    ``config`` when given)."""
     names = list(stability_transforms(turns))
     units = [(s, t, tuple(turns)) for s in scans for t in [None, *names]]
-    work = functools.partial(stability_unit, detect_options={"jobs": 1, "seed": seed})
+    options: dict[str, Any] = {"jobs": 1, "seed": seed}
+    if config is not None:
+        options["config"] = config
+    work = functools.partial(stability_unit, detect_options=options)
     runs = map_scenes(work, units, jobs=jobs, description="Stability runs")
     ref = {r["scene"]: r["detections"] for r in runs if r["transform"] is None}
     table: dict[str, dict[str, list[int]]] = {n: {} for n in names}
@@ -758,7 +766,7 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
         picked = richest(real.scenes, count, one_per=lambda o: o.source.group)
         picked += richest(fused, count, one_per=lambda o: by_name[o.name].room)
         t0 = time.perf_counter()
-        stab = stability(picked, turns, jobs, args.seed)
+        stab = stability(picked, turns, jobs, args.seed, opts.get("config"))
         stab["seconds"] = round(time.perf_counter() - t0, 1)
         doc["stability"] = stab
         console.print(
