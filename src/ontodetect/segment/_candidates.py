@@ -45,6 +45,10 @@ DENSITY_RADII = (1.0, 2.0)
 PRISM_MARGIN = 0.25
 #: ... and this high (m) above it (a backrest above a seat; for a top, clutter on it).
 PRISM_ABOVE = (0.7, 0.3)
+#: Patches at least this high (m) are tops; lower ones are seats.
+TOP_HEIGHT = 0.6
+#: A top's prism leaves out the prism of a part at least this much lower (m).
+BELOW_TOP = 0.15
 #: Most candidates any one generator proposes.
 MAX_PER_GENERATOR = 150
 
@@ -280,14 +284,14 @@ def _part_hypotheses(p: Proposal) -> list[NDArray[np.int64]]:
         d = cent[:, :2] - s.center
         u, v = np.abs(d @ s.axes[0]), np.abs(d @ s.axes[1])
         half = s.extent / 2 + PRISM_MARGIN
-        above = PRISM_ABOVE[0] if s.height < 0.6 else PRISM_ABOVE[1]
+        above = PRISM_ABOVE[0] if s.height < TOP_HEIGHT else PRISM_ABOVE[1]
         inside = (u <= half[0]) & (v <= half[1]) & (cent[:, 2] <= s.height + above)
         boxes.append((s, inside))
     for s, inside in boxes:
         keep = inside.copy()
-        if s.height >= 0.6:  # a top does not claim a lower part's segments
+        if s.height >= TOP_HEIGHT:  # a top does not claim a lower part's segments
             for t, other in boxes:
-                if t is not s and t.height < s.height - 0.15:
+                if t is not s and t.height < s.height - BELOW_TOP:
                     keep &= ~other
         if keep.any():
             out.append(p.voxels_of(np.flatnonzero(keep)))
