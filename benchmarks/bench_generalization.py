@@ -58,6 +58,7 @@ from benchmarks._generalization import (
 )
 from ontodetect import __version__
 from ontodetect.cloud import DataWarning
+from ontodetect.config import Config
 from ontodetect.errors import OntoDetectError
 from ontodetect.evaluation import (
     DatasetEvaluation,
@@ -424,12 +425,20 @@ def stability_unit(
 
 
 def stability(
-    scans: Sequence[SceneSource], turns: Sequence[float], jobs: int, seed: int
+    scans: Sequence[SceneSource],
+    turns: Sequence[float],
+    jobs: int,
+    seed: int,
+    config: Config | None = None,
 ) -> dict[str, Any]:
-    """Share of reference detections that reappear, per transform and scan."""
+    """Share of reference detections that reappear, per transform and scan (detected with
+    ``config`` when given)."""
     names = list(stability_transforms(turns))
     units = [(s, t, tuple(turns)) for s in scans for t in [None, *names]]
-    work = functools.partial(stability_unit, detect_options={"jobs": 1, "seed": seed})
+    options: dict[str, Any] = {"jobs": 1, "seed": seed}
+    if config is not None:
+        options["config"] = config
+    work = functools.partial(stability_unit, detect_options=options)
     runs = map_scenes(work, units, jobs=jobs, description="Stability runs")
     ref = {r["scene"]: r["detections"] for r in runs if r["transform"] is None}
     table: dict[str, dict[str, list[int]]] = {n: {} for n in names}
@@ -625,6 +634,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--quick", action="store_true", help="a small smoke run")
     ap.add_argument("--seed", type=int, default=0, help="seed of detection (default 0)")
     ap.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="a configuration value for detection, e.g. detect.proposals=recognition (repeatable)",
+    )
+    ap.add_argument(
         "--source",
         choices=("furnished", "parametric"),
         default="furnished",
@@ -654,7 +671,9 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
     out: Path = args.out
     out.mkdir(parents=True, exist_ok=True)
     jobs = args.jobs
-    opts = {"seed": args.seed}
+    opts: dict[str, Any] = {"seed": args.seed}
+    if args.overrides:
+        opts["config"] = Config().with_overrides(args.overrides)
     source = room_source(args.source)
     reporter = RichReporter() if err.is_terminal else None
     doc: dict[str, Any] = {
@@ -663,6 +682,7 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
         "quick": bool(args.quick),
         "jobs": jobs,
         "seed": args.seed,
+        "overrides": list(args.overrides),
         "scene_source": dataclasses.asdict(source),
     }
     console.print(
@@ -746,7 +766,7 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
         picked = richest(real.scenes, count, one_per=lambda o: o.source.group)
         picked += richest(fused, count, one_per=lambda o: by_name[o.name].room)
         t0 = time.perf_counter()
-        stab = stability(picked, turns, jobs, args.seed)
+        stab = stability(picked, turns, jobs, args.seed, opts.get("config"))
         stab["seconds"] = round(time.perf_counter() - t0, 1)
         doc["stability"] = stab
         console.print(

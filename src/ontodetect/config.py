@@ -386,6 +386,14 @@ class DetectConfig(_Section):
         Interval(0, 10**12, "both", integer=True),
         "Clouds with more points than this get a single pass.",
     )
+    # Issue 20, opt-in: "recognition" makes many candidate objects from an over-segmentation,
+    # scores every one and keeps the best non-overlapping set (no vote).
+    proposals: str = _param(
+        "vote",
+        OneOf(("vote", "recognition")),
+        "Object proposals: 'vote' (part-seeded clusters, majority of turned passes) or "
+        "'recognition' (many candidates scored by the ontology, best disjoint set chosen).",
+    )
 
 
 # -- the whole configuration ---------------------------------------------------------------

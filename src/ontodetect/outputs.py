@@ -243,6 +243,8 @@ def explain(
         raise InvalidParameterError("min_points", "an integer >= 0", min_points)
     wanted = None if classes is None else set(classes)
     rows = []
+    cands = result.candidates
+    origin = {c.cluster: i for i, c in enumerate(cands) if c.cluster is not None}
     for k, (c, s, choice) in enumerate(zip(result.segmentation, result.scores, result.choices)):
         if c.num_points < min_points:
             continue
@@ -291,4 +293,15 @@ def explain(
                 "classes": classes,
             }
         )
+        if k in origin:  # segmentation by recognition: the candidates this one beat
+            rows[-1]["beat"] = [
+                {
+                    "source": o.source,
+                    "label": o.label,
+                    "weight": o.gain,
+                    "num_voxels": o.num_voxels,
+                }
+                for o in cands
+                if o.beaten_by == origin[k]
+            ]
     return rows

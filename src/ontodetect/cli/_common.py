@@ -23,6 +23,7 @@ CONFIG_OPTIONS = {
     "beta": "detect.beta",
     "context": "detect.context",
     "votes": "detect.votes",
+    "proposals": "detect.proposals",
 }
 
 

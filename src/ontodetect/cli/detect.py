@@ -76,6 +76,12 @@ def detect(
         help="Passes over the scan, a majority keeps a detection "
         "(detect.votes, default 3; 1: one pass, about half the time).",
     ),
+    proposals: str | None = typer.Option(
+        None,
+        "--proposals",
+        help="Object proposals: vote (default) or recognition (issue 20, opt-in; "
+        "detect.proposals).",
+    ),
     seed: int = typer.Option(0, "--seed", help="Seed of every random step."),
     explain_: str | None = typer.Option(
         None,
@@ -136,6 +142,7 @@ def detect(
         beta=beta,
         context=context,
         votes=votes,
+        proposals=proposals,
     )
     onto = load_ontology_option(ontology, ontology_only)
     room_arg = room_option(room, room_probs)
@@ -299,6 +306,9 @@ def _print_explain(rows) -> None:
             f" -> {row['label'] or 'no label'}" + (f" ({row['reason']})" if row["reason"] else "")
         )
         console.print(f"[bold]{head}[/]")
+        for o in row.get("beat", []):
+            why = "no label" if o["label"] is None else f"{o['label']}, weight {o['weight']:.2f}"
+            console.print(f"  beat a candidate of {o['source']} ({o['num_voxels']} voxels): {why}")
         probs = Table(show_header=True, box=None, pad_edge=False)
         probs.add_column("class")
         probs.add_column("P_obj|ont", justify="right")

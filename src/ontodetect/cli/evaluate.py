@@ -83,6 +83,12 @@ def eval_(
         "--votes",
         help="Passes over each scan, a majority keeps a detection (detect.votes, default 3).",
     ),
+    proposals: str | None = typer.Option(
+        None,
+        "--proposals",
+        help="Object proposals: vote (default) or recognition (issue 20, opt-in; "
+        "detect.proposals).",
+    ),
     seed: int = typer.Option(0, "--seed", help="Seed of every random step."),
     turns: str | None = typer.Option(
         None,
@@ -111,6 +117,7 @@ def eval_(
         beta=beta,
         context=context,
         votes=votes,
+        proposals=proposals,
     )
     opts: dict = {"config": cfg, "seed": seed}
     if ontology or ontology_only:

@@ -30,13 +30,16 @@ from ._energy import (
     label_probabilities,
     label_probability,
 )
+from ._select import conflicts, select_candidates
 
 __all__ = [
     "LabelChoice",
+    "conflicts",
     "energy",
     "label_clusters",
     "label_costs",
     "label_fit",
     "label_probabilities",
     "label_probability",
+    "select_candidates",
 ]

@@ -29,6 +29,7 @@ from ..ontology import ClusterScores, Ontology, builtin_ontology, class_priors, 
 from ..preprocess import Ground, find_ground, smooth_depth
 from ..segment import Segmentation, segment
 from ..segment._measure import describe_clusters
+from ._recognize import recognize
 from ._result import Detection, Result, _detection
 from ._vote import PassCluster, _vote, vote_turns
 
@@ -119,6 +120,8 @@ def detect(
         )
     ontology = ontology or builtin_ontology()
     priors = class_priors(ontology, room, indoor)
+    if d.proposals == "recognition":
+        return _recognition_result(cloud, config, ontology, priors, seed, eye)
     passes = d.votes if len(cloud) <= d.vote_max_points else 1
     turned = [
         config.replace(prepare={"turn": (config.prepare.turn + t + 180.0) % 360.0 - 180.0})
@@ -155,6 +158,37 @@ def detect(
         ontology=ontology,
         priors=priors,
         timings=timings,
+    )
+
+
+def _recognition_result(
+    cloud: PointCloud,
+    config: Config,
+    ontology: Ontology,
+    priors: Mapping[str, float],
+    seed: int,
+    eye: NDArray[np.float64] | None,
+) -> Result:
+    """:func:`detect` with ``detect.proposals: recognition`` (:func:`recognize`)."""
+    t0 = time.perf_counter()
+    scan = smooth_depth(cloud) if config.prepare.depth_smoothing else cloud
+    before = time.perf_counter() - t0
+    seg, scores, choices, found, timings, candidates = recognize(
+        scan, config, ontology, priors, seed=seed, viewpoint=eye, ground=None
+    )
+    timings["segment"] += before
+    found.sort(key=lambda d: (-d.score, d.cluster))
+    detections = [Detection(**{**d.__dict__, "id": i + 1}) for i, d in enumerate(found)]
+    return Result(
+        cloud=cloud,
+        detections=detections,
+        segmentation=seg,
+        scores=scores,
+        choices=choices,
+        ontology=ontology,
+        priors=dict(priors),
+        timings=timings,
+        candidates=candidates,
     )
 
 

@@ -118,6 +118,9 @@ class Result:
         P_obj per class.
     timings : dict of str to float
         Seconds per stage.
+    candidates : list
+        With ``detect.proposals: recognition``, every candidate object scored
+        (``pipeline._recognize.Candidate``); empty with the vote.
     """
 
     cloud: PointCloud
@@ -128,6 +131,7 @@ class Result:
     ontology: Ontology
     priors: dict[str, float]
     timings: dict[str, float] = field(default_factory=dict)
+    candidates: list[Any] = field(default_factory=list)
 
     @property
     def frame(self) -> dict[str, Any]:

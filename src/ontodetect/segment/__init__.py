@@ -12,6 +12,7 @@ between them, an upright box, and flags when it breaks the limits of Table 4.1.
 
 from __future__ import annotations
 
+from ._candidates import GENERATORS, Proposal, Segments, felzenszwalb, oversegment, propose
 from ._cluster import (
     core_neighbors,
     dbscan,
@@ -34,6 +35,7 @@ from ._segmentation import (
     Cluster,
     Segmentation,
     cluster,
+    clusters_of_voxels,
     effective_radius,
     plane_to_dict,
     segment,
@@ -42,21 +44,28 @@ from ._segmentation import (
 
 __all__ = [
     "FLAGS",
+    "GENERATORS",
     "Box",
     "Cluster",
     "PartSeed",
+    "Proposal",
     "Segmentation",
+    "Segments",
     "cluster",
+    "clusters_of_voxels",
     "core_neighbors",
     "dbscan",
     "describe_cluster",
     "describe_clusters",
     "effective_radius",
     "euclidean_clusters",
+    "felzenszwalb",
     "hidden_heights",
     "horizontal_parts",
     "open_below",
+    "oversegment",
     "plane_to_dict",
+    "propose",
     "radius_graph",
     "region_growing",
     "relabel",

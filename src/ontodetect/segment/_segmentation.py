@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import zlib
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -21,7 +22,7 @@ from ._cluster import core_neighbors, dbscan, euclidean_clusters, radius_graph, 
 from ._parts import PartSeed, horizontal_parts, seeded_clusters
 from .planes import extract_planes, plane_relations
 
-__all__ = ["Box", "Cluster", "Segmentation", "cluster", "segment"]
+__all__ = ["Box", "Cluster", "Segmentation", "cluster", "clusters_of_voxels", "segment"]
 
 FORMAT = "ontodetect.segmentation/1"
 #: Normals that decide which voxels are flat parts come from neighbours within this many
@@ -481,41 +482,20 @@ def cluster(
     with progress("Fitting planes", total=k) as advance:
         for c in range(k):
             local = np.sort(order[starts[c] : starts[c] + sizes[c]])
-            vox = obj[local]
-            pts = centers[local]
-            cols = None if prepared.colors is None else prepared.colors[vox]
-            planes, relations = [], []
-            box = upright_box(pts)
-            surface = len(vox) * voxel_area
-            # Clusters flagged too small get no planes: nothing will be made of them.
-            if fit_planes and surface >= cc.min_surface:
-                planes = extract_planes(
-                    pts,
-                    cols,
-                    threshold=pc.threshold,
-                    min_points=min_plane_points,
-                    min_extent=pc.min_extent,
-                    max_planes=pc.max_planes,
-                    max_trials=pc.max_trials,
-                    floor_z=0.0,
-                    connectivity=radius,
-                    rng=np.random.default_rng(streams[c]),
-                )
-                relations = plane_relations(pts, planes) if len(planes) > 1 else []
-            flags = _flags(surface, box, planes if fit_planes else None, cc)
             parts = [seeds[int(seed_of[c])]] if len(seed_of) > c and seed_of[c] >= 0 else []
             clusters.append(
-                Cluster(
-                    id=c,
-                    voxels=vox,
-                    point_indices=point_groups(vox),
-                    centers=pts,
-                    box=box,
-                    planes=list(planes),
-                    relations=list(relations),
-                    flags=flags,
-                    parts=parts,
-                    surface=float(surface),
+                _build_cluster(
+                    prepared,
+                    config,
+                    c,
+                    obj[local],
+                    centers[local],
+                    np.random.default_rng(streams[c]),
+                    radius,
+                    point_groups,
+                    parts,
+                    fit_planes=fit_planes,
+                    min_plane_points=min_plane_points,
                 )
             )
             advance(1)
@@ -539,6 +519,99 @@ def cluster(
     for c in clusters:
         voxel_labels[c.voxels] = c.id
     return Segmentation(clusters, prepared, voxel_labels, radius, cc.method, config)
+
+
+def _build_cluster(
+    prepared: PreparedScene,
+    config: Config,
+    cid: int,
+    vox: NDArray[np.int64],
+    pts: NDArray[np.float64],
+    rng: np.random.Generator,
+    radius: float,
+    point_groups: Any,
+    parts: list[PartSeed],
+    *,
+    fit_planes: bool,
+    min_plane_points: int,
+) -> Cluster:
+    """One cluster of the voxels ``vox`` (centres ``pts``): its box, MSAC planes, flags."""
+    cc, pc = config.cluster, config.planes
+    cols = None if prepared.colors is None else prepared.colors[vox]
+    planes, relations = [], []
+    box = upright_box(pts)
+    surface = len(vox) * prepared.spacing**2
+    # Clusters flagged too small get no planes: nothing will be made of them.
+    if fit_planes and surface >= cc.min_surface:
+        planes = extract_planes(
+            pts,
+            cols,
+            threshold=pc.threshold,
+            min_points=min_plane_points,
+            min_extent=pc.min_extent,
+            max_planes=pc.max_planes,
+            max_trials=pc.max_trials,
+            floor_z=0.0,
+            connectivity=radius,
+            rng=rng,
+        )
+        relations = plane_relations(pts, planes) if len(planes) > 1 else []
+    flags = _flags(surface, box, planes if fit_planes else None, cc)
+    return Cluster(
+        id=cid,
+        voxels=vox,
+        point_indices=point_groups(vox),
+        centers=pts,
+        box=box,
+        planes=list(planes),
+        relations=list(relations),
+        flags=flags,
+        parts=parts,
+        surface=float(surface),
+    )
+
+
+def clusters_of_voxels(
+    prepared: PreparedScene,
+    voxel_sets: Sequence[NDArray[np.int64]],
+    config: Config | None = None,
+    *,
+    seed: int | None = 0,
+    radius: float | None = None,
+    parts: Sequence[list[PartSeed]] | None = None,
+) -> list[Cluster]:
+    """A :class:`Cluster` (box, MSAC planes, flags) for each given set of voxels, as
+    :func:`cluster` makes them; numbered in order. Each set's plane fits draw from a
+    stream seeded by ``seed`` and the set itself, so a candidate gets the same planes
+    whatever else is proposed beside it."""
+    config = config or prepared.config
+    spacing = prepared.spacing
+    radius = radius or effective_radius(
+        config.cluster.radius, spacing, config.cluster.spacing_factor
+    )
+    min_plane_points = max(3, math.ceil(config.planes.min_area / spacing**2))
+    point_groups = _points_by_voxel(prepared)
+    out = []
+    for i, vox in enumerate(voxel_sets):
+        vox = np.unique(np.asarray(vox, dtype=np.int64))
+        key = zlib.crc32(vox.tobytes())
+        rng = np.random.default_rng(np.random.SeedSequence([seed or 0, key]))
+        out.append(
+            _build_cluster(
+                prepared,
+                config,
+                i,
+                vox,
+                prepared.centers[vox],
+                rng,
+                radius,
+                point_groups,
+                list(parts[i]) if parts is not None else [],
+                fit_planes=True,
+                min_plane_points=min_plane_points,
+            )
+        )
+    return out
 
 
 def _points_by_voxel(prepared: PreparedScene):
