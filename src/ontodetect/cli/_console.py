@@ -16,8 +16,10 @@ from .._progress import use_reporter
 
 __all__ = ["RichReporter", "console", "err_console", "reporting", "setup_output", "state"]
 
-console = Console(highlight=False)
-err_console = Console(stderr=True, highlight=False)
+# Markup is off: paths, file contents and keys such as ``[classes.chair.parts.seat]`` are
+# printed verbatim; our own styling goes through ``rich.text.Text``.
+console = Console(highlight=False, markup=False)
+err_console = Console(stderr=True, highlight=False, markup=False)
 
 
 class _State:

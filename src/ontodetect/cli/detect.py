@@ -7,6 +7,7 @@ from pathlib import Path
 
 import typer
 from rich.table import Table
+from rich.text import Text
 
 from ..cloud import as_position
 from ..io import read_cloud
@@ -155,7 +156,7 @@ def _print_explain(result) -> None:
             f"cluster {row['cluster']}: {row['num_points']} points, {row['planes']} planes"
             f" -> {row['label'] or 'no label'}" + (f" ({row['reason']})" if row["reason"] else "")
         )
-        console.print(f"[bold]{head}[/]")
+        console.print(Text(head, style="bold"))
         probs = Table(show_header=True, box=None, pad_edge=False)
         probs.add_column("class")
         probs.add_column("P_obj|ont", justify="right")

@@ -7,6 +7,7 @@ from typing import Any
 
 import typer
 import yaml
+from rich.text import Text
 
 from ..errors import InvalidParameterError
 from . import app
@@ -94,8 +95,8 @@ def synth(
     furnished = furnished or catalog is not None
     if list_:
         kinds = FURNISHED_ROOM_TYPES if furnished else room_types()
-        console.print("[bold]room types[/]: " + ", ".join(kinds))
-        console.print("[bold]sensors[/]:")
+        console.print(Text.assemble(("room types", "bold"), ": " + ", ".join(kinds)))
+        console.print(Text.assemble(("sensors", "bold"), ":"))
         for name in SENSORS:
             console.print(f"  {name:<11} {_SENSOR_HELP[name]}")
             console.print(f"  {'':<11} options: {', '.join(sensor_options(name))}", style="dim")
