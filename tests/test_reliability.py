@@ -1,0 +1,280 @@
+"""Issue 23: every bad input gets one clear line and exit status 2, resources are bounded
+before they are taken, and the output folder of a run changes all at once.
+
+Every case the issue lists is one test here; the hostile files are made in ``tmp_path``.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import struct
+import zipfile
+
+import numpy as np
+import pytest
+
+from ontodetect.cli import main
+from ontodetect.io import write_cloud
+from ontodetect.synth import synthesize
+
+ONTOLOGY_HEAD = "format: ontodetect.ontology/1\nclasses:\n"
+
+
+def one_line(capsys, status: int, *must: str) -> str:
+    """The run failed with exit status 2 and exactly one line on stderr holding ``must``."""
+    err = capsys.readouterr().err
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert status == 2, err
+    assert len(lines) == 1, err
+    assert "Traceback" not in err
+    for text in must:
+        assert text in lines[0], lines[0]
+    return lines[0]
+
+
+@pytest.fixture(scope="module")
+def room(tmp_path_factory):
+    """A small simulated room written as PLY (and its cloud)."""
+    folder = tmp_path_factory.mktemp("room")
+    cloud = synthesize("tiny", seed=1).cloud
+    return write_cloud(folder / "room.ply", cloud), cloud
+
+
+def _detect(room_file, out, *extra):
+    return main(["-q", "detect", str(room_file), "-o", str(out), "--votes", "1", *extra])
+
+
+# ------------------------------------------------------------------------------------------
+# 1. One error path: markup printed verbatim, tracebacks turned into one line
+
+
+def test_markup_in_a_ply_header_is_printed_verbatim(tmp_path, capsys):
+    f = tmp_path / "m.ply"
+    f.write_text("ply\nformat ascii 1.0\nelement vertex [/x]\nend_header\n")
+    one_line(capsys, main(["info", str(f)]), "m.ply", "'[/x]'")
+
+
+def test_markup_like_bold_in_a_path_does_not_vanish(tmp_path, capsys):
+    f = tmp_path / "[bold]x.ply"
+    f.write_text("ply\nformat ascii 1.0\nelement vertex -1\nend_header\n")
+    one_line(capsys, main(["info", str(f)]), "[bold]x.ply")
+
+
+def test_ontology_key_paths_are_visible(tmp_path, capsys):
+    f = tmp_path / "o.yaml"
+    f.write_text(ONTOLOGY_HEAD + "  bar_stool:\n    parts:\n      seat: {height: oops}\n")
+    one_line(
+        capsys,
+        main(["ontology", "check", str(f)])
+        if False
+        else main(["detect", str(f), "-o", str(tmp_path / "o"), "--ontology", str(f)]),
+        "[classes.bar_stool.parts.seat.height]",
+    )
+
+
+def test_pcd_with_an_empty_height_line(tmp_path, capsys):
+    f = tmp_path / "h.pcd"
+    f.write_text(
+        "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1\nHEIGHT\n"
+        "POINTS 1\nDATA ascii\n1 2 3\n"
+    )
+    one_line(capsys, main(["info", str(f)]), "h.pcd", "HEIGHT")
+
+
+def _las_with_extra_bytes_type_0(path):
+    import laspy
+
+    header = laspy.LasHeader(point_format=3, version="1.4")
+    header.add_extra_dim(laspy.ExtraBytesParams(name="foo", type=np.uint8))
+    las = laspy.LasData(header)
+    las.x = np.array([0.0, 1.0])
+    las.y = np.array([0.0, 1.0])
+    las.z = np.array([0.0, 1.0])
+    las.write(path)
+    data = bytearray(path.read_bytes())
+    # The extra-bytes descriptor: 2 reserved bytes, then its data_type byte.
+    at = data.index(b"foo")  # the descriptor's name field starts 4 bytes after its start
+    data[at - 2] = 0
+    path.write_bytes(bytes(data))
+
+
+def test_las_extra_bytes_descriptor_of_type_0(tmp_path, capsys):
+    f = tmp_path / "e.las"
+    _las_with_extra_bytes_type_0(f)
+    one_line(capsys, main(["info", str(f)]), "e.las")
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="permissions do not bind root")
+def test_a_file_in_an_unreadable_folder(tmp_path, capsys):
+    folder = tmp_path / "locked"
+    folder.mkdir()
+    (folder / "a.ply").write_text("ply\n")
+    folder.chmod(0)
+    try:
+        one_line(capsys, main(["info", str(folder / "a.ply")]), "a.ply", "permission denied")
+    finally:
+        folder.chmod(0o755)
+
+
+def test_a_folder_where_a_file_is_expected(tmp_path, capsys):
+    # What root sees instead of an unreadable folder: a path that cannot be read as a file.
+    folder = tmp_path / "x.ply"
+    folder.mkdir()
+    one_line(capsys, main(["info", str(folder)]), "x.ply")
+
+
+def test_output_where_detections_json_is_a_folder(room, tmp_path, capsys):
+    out = tmp_path / "out"
+    (out / "detections.json").mkdir(parents=True)
+    one_line(capsys, _detect(room[0], out, "--no-picture"), "detections.json")
+
+
+def test_negative_seed(room, tmp_path, capsys):
+    one_line(capsys, _detect(room[0], tmp_path / "o", "--seed", "-1"), "'seed'", "-1")
+
+
+def test_deeply_nested_ontology(tmp_path, capsys):
+    f = tmp_path / "deep.yaml"
+    f.write_text(ONTOLOGY_HEAD + "  a: " + "[" * 5000 + "]" * 5000 + "\n")
+    one_line(capsys, main(["detect", str(f), "-o", str(tmp_path), "--ontology", str(f)]), "nested")
+
+
+def test_deeply_nested_configuration(room, tmp_path, capsys):
+    f = tmp_path / "deep.yaml"
+    f.write_text("cluster: " + "{a: " * 3000 + "1" + "}" * 3000 + "\n")
+    one_line(capsys, _detect(room[0], tmp_path / "o", "--config", str(f)), "deep.yaml", "nested")
+
+
+def test_yaml_key_that_is_a_list(room, tmp_path, capsys):
+    f = tmp_path / "k.yaml"
+    f.write_text("? [cluster, radius]\n: 1\n")
+    one_line(capsys, _detect(room[0], tmp_path / "o", "--config", str(f)), "k.yaml", "key")
+    g = tmp_path / "k2.yaml"
+    g.write_text(ONTOLOGY_HEAD + "  ? [a, b]\n  : {}\n")
+    one_line(capsys, _detect(room[0], tmp_path / "o", "--ontology", str(g)), "k2.yaml", "key")
+
+
+@pytest.fixture(scope="module")
+def stored(room, tmp_path_factory):
+    """detections.json of the small room."""
+    out = tmp_path_factory.mktemp("stored")
+    assert _detect(room[0], out, "--no-picture") == 0
+    return json.loads((out / "detections.json").read_text())
+
+
+def test_cad_fit_on_parts_that_are_a_string(room, stored, tmp_path, capsys):
+    doc = json.loads(json.dumps(stored))
+    assert doc["detections"], "the small room has detections"
+    doc["detections"][0]["parts"] = "x"
+    f = tmp_path / "d.json"
+    f.write_text(json.dumps(doc))
+    one_line(
+        capsys, main(["cad", "fit", str(f), str(room[0]), "-o", str(tmp_path / "o")]), "d.json"
+    )
+
+
+def test_cad_fit_on_a_box_of_1e30(room, stored, tmp_path, capsys):
+    doc = json.loads(json.dumps(stored))
+    doc["detections"][0]["box"]["size"] = [1e30, 1e30, 1e30]
+    f = tmp_path / "d.json"
+    f.write_text(json.dumps(doc))
+    one_line(
+        capsys, main(["cad", "fit", str(f), str(room[0]), "-o", str(tmp_path / "o")]), "d.json"
+    )
+
+
+def test_a_point_at_1e20_metres(room, tmp_path, capsys):
+    cloud = room[1]
+    xyz = cloud.xyz.copy()
+    xyz[0] = [1e20, 0.0, 0.0]
+    f = write_cloud(tmp_path / "far.ply", cloud.replace(xyz=xyz))
+    out = tmp_path / "o"
+    one_line(capsys, _detect(f, out), "far.ply", "1e+20")
+    assert not out.exists() or not any(out.iterdir()), "nothing written"
+
+
+def test_unexpected_exceptions_are_one_line_and_traceback_with_v(room, tmp_path, capsys):
+    import ontodetect.pipeline._detect as d
+
+    def boom(*a, **k):
+        raise LookupError("surprise [red]x[/]")
+
+    mp = pytest.MonkeyPatch()
+    mp.setattr(d, "class_priors", boom)
+    try:
+        one_line(capsys, _detect(room[0], tmp_path / "o"), "LookupError", "[red]x[/]")
+        status = main(["-v", "detect", str(room[0]), "-o", str(tmp_path / "o"), "--votes", "1"])
+        assert status == 2
+        assert "Traceback" in capsys.readouterr().err
+    finally:
+        mp.undo()
+
+
+# ------------------------------------------------------------------------------------------
+# 2. Budgets checked before allocating
+
+
+def _npy_header(shape: str, descr: str = "<f8") -> bytes:
+    head = f"{{'descr': '{descr}', 'fortran_order': False, 'shape': {shape}, }}".encode()
+    head += b" " * (63 - (len(head) + 10) % 64) + b"\n"
+    return b"\x93NUMPY\x01\x00" + struct.pack("<H", len(head)) + head
+
+
+def test_npz_zip_bomb_is_refused_before_decompressing(tmp_path, capsys, monkeypatch):
+    # Small version of the 3.4 MB -> 3.4 GB bomb: zeros compress ~1000x, and the member's
+    # header declares more than the budget, which is checked before inflating.
+    monkeypatch.setenv("ONTODETECT_MAX_BYTES", str(8 * 2**20))
+    rows = 1_000_000
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", compression=zipfile.ZIP_DEFLATED) as z:
+        z.writestr("xyz.npy", _npy_header(f"({rows}, 3)") + bytes(rows * 24))
+    f = tmp_path / "bomb.npz"
+    f.write_bytes(buf.getvalue())
+    assert f.stat().st_size < 100_000
+    one_line(capsys, main(["info", str(f)]), "bomb.npz", "ONTODETECT_MAX_BYTES")
+
+
+def test_pcd_claiming_a_compressed_size_of_4_gb(tmp_path, capsys):
+    f = tmp_path / "c.pcd"
+    head = (
+        b"VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 100\nHEIGHT 1\n"
+        b"POINTS 100\nDATA binary_compressed\n"
+    )
+    f.write_bytes(head + struct.pack("<II", 0xFFFFFFFF, 1200) + bytes(28_000))
+    one_line(capsys, main(["info", str(f)]), "c.pcd", "4294967295")
+
+
+def test_npy_declaring_200_million_points(tmp_path, capsys):
+    # An honest file: the header's size matches the file's (sparse, so it takes no disk).
+    f = tmp_path / "big.npy"
+    head = _npy_header("(200000000, 3)", "<f4")
+    with open(f, "wb") as fh:
+        fh.write(head)
+        fh.truncate(len(head) + 200_000_000 * 12)
+    one_line(capsys, main(["info", str(f)]), "big.npy", "200,000,000 points")
+
+
+def test_dev_zero_as_configuration_and_as_npz(room, tmp_path, capsys):
+    one_line(capsys, _detect(room[0], tmp_path / "o", "--config", "/dev/zero"), "/dev/zero")
+    link = tmp_path / "zero.npz"
+    link.symlink_to("/dev/zero")
+    one_line(capsys, main(["info", str(link)]), "zero.npz", "not a regular file")
+
+
+def test_fifo_as_input_and_ontology_does_not_block(room, tmp_path, capsys):
+    fifo = tmp_path / "in.ply"
+    os.mkfifo(fifo)
+    one_line(capsys, main(["info", str(fifo)]), "in.ply", "FIFO")
+    onto = tmp_path / "o.yaml"
+    os.mkfifo(onto)
+    one_line(capsys, _detect(room[0], tmp_path / "o", "--ontology", str(onto)), "o.yaml", "FIFO")
+
+
+def test_yaml_alias_bomb(room, tmp_path, capsys):
+    lines = ["a0: &a0 [x, x, x, x, x, x, x, x, x]"]
+    lines += [f"a{i}: &a{i} [{', '.join([f'*a{i - 1}'] * 9)}]" for i in range(1, 9)]
+    f = tmp_path / "bomb.yaml"
+    f.write_text(ONTOLOGY_HEAD.replace("classes:\n", "") + "\n".join(lines) + "\n")
+    one_line(capsys, _detect(room[0], tmp_path / "o", "--ontology", str(f)), "bomb.yaml", "alias")
