@@ -1,19 +1,24 @@
 """Writing a detection result: detections.json, a labelled PLY and a picture.
 
-Every file is written atomically, so an interrupted run never leaves a
-half-written result beside an older complete one.
+The files of one run are written into a staging folder beside the output folder and
+swapped in together at the end (:func:`ontodetect.io.staged_folder`): an interrupted or
+failed run (a full disk) leaves the previous result as it was, never a mix. The seconds
+each stage took go to ``timings.json``, so that detections.json is byte-identical for the
+same input and seed.
 """
 
 from __future__ import annotations
 
+import json
 import os
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .io import make_folder, write_cloud
+from .io import atomic_write_text, staged_folder, write_cloud
 from .io._detections import write_detections
 from .pipeline import Result
 from .render import BoxDrawing, render_scene
@@ -36,17 +41,36 @@ def write_outputs(
     *,
     picture: bool = True,
     title: str | None = None,
+    also: Callable[[Path], object] | None = None,
 ) -> OutputFiles:
-    """Write ``detections.json``, ``labelled.ply`` and ``detections.png`` into ``out_dir``.
+    """Write ``detections.json``, ``timings.json``, ``labelled.ply`` and ``detections.png``
+    into ``out_dir``, all or nothing.
 
     ``labelled.ply`` holds the input points (as read, minus any dropped as NaN)
     with two fields: ``label`` (index into ``result.class_names``, -1 for none)
-    and ``instance`` (detection id, 0 for none).
+    and ``instance`` (detection id, 0 for none). ``also(folder)``, when given, writes
+    more files of the same run (the CAD object map) into the staging folder, so that
+    they are swapped in with the rest.
     """
-    out = make_folder(out_dir, "output folder")
+    final = Path(out_dir)
+    with staged_folder(final, "output folder") as stage:
+        files = _write_files(result, stage, picture=picture, title=title)
+        if also is not None:
+            also(stage)
+    return OutputFiles(
+        final / files.detections.name,
+        final / files.labelled.name,
+        None if files.picture is None else final / files.picture.name,
+    )
+
+
+def _write_files(result: Result, out: Path, *, picture: bool, title: str | None) -> OutputFiles:
     doc = result.to_dict()
     doc["classes"] = result.class_names
+    # Seconds differ between two runs; the contract file does not.
+    timings = doc.pop("timings", {})
     det_path = write_detections(out / "detections.json", doc)
+    atomic_write_text(out / "timings.json", json.dumps(timings, indent=2) + "\n")
     label, instance = result.point_labels()
     cloud = result.cloud
     labelled = cloud.replace(

@@ -117,9 +117,13 @@ def detect(
 
             fits = fit_detections(result, seed=seed, ontology=onto)
             result = with_cad(result, fits)
-        files = write_outputs(result, out, picture=picture)
-        if cad:
-            object_map = write_object_map(fits, out, seed=seed)
+
+            def also(folder: Path) -> object:
+                return write_object_map(fits, folder, seed=seed)
+        else:
+            also = None
+        files = write_outputs(result, out, picture=picture, also=also)
+        object_map = also
     if explain_:
         _print_explain(result)
     if state.quiet:
@@ -145,7 +149,7 @@ def detect(
         + (", object_map.ply, object_map.glb" if object_map is not None else "")
     )
     if state.verbose:
-        console.print(json.dumps(result.to_dict()["timings"]))
+        console.print(json.dumps(result.to_dict()["timings"]), soft_wrap=True)
 
 
 def _print_explain(result) -> None:

@@ -23,7 +23,14 @@ from typing import Any
 
 from ..cloud import PointCloud
 from ..errors import ReadError, UnsupportedFormatError, WriteError
-from ._atomic import atomic_write, atomic_write_bytes, atomic_write_text, make_folder
+from ._atomic import (
+    RUN_MARKER,
+    atomic_write,
+    atomic_write_bytes,
+    atomic_write_text,
+    make_folder,
+    staged_folder,
+)
 from ._detections import (
     DETECTIONS_FORMAT,
     detections_schema,
@@ -39,6 +46,7 @@ __all__ = [
     "DETECTIONS_FORMAT",
     "FORMATS",
     "READERS",
+    "RUN_MARKER",
     "WRITERS",
     "FormatInfo",
     "atomic_write",
@@ -49,6 +57,7 @@ __all__ = [
     "make_folder",
     "read_cloud",
     "read_detections",
+    "staged_folder",
     "supported_formats",
     "validate_detections",
     "write_cloud",
