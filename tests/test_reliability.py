@@ -6,6 +6,7 @@ Every case the issue lists is one test here; the hostile files are made in ``tmp
 
 from __future__ import annotations
 
+import errno
 import io
 import json
 import os
@@ -278,3 +279,71 @@ def test_yaml_alias_bomb(room, tmp_path, capsys):
     f = tmp_path / "bomb.yaml"
     f.write_text(ONTOLOGY_HEAD.replace("classes:\n", "") + "\n".join(lines) + "\n")
     one_line(capsys, _detect(room[0], tmp_path / "o", "--ontology", str(f)), "bomb.yaml", "alias")
+
+
+# ------------------------------------------------------------------------------------------
+# 4. Outputs all or nothing; detections.json byte-identical
+
+
+def test_detections_json_is_byte_identical_for_the_same_input_and_seed(room, tmp_path):
+    a, b = tmp_path / "a", tmp_path / "b"
+    assert _detect(room[0], a, "--no-picture", "--seed", "3") == 0
+    assert _detect(room[0], b, "--no-picture", "--seed", "3") == 0
+    assert (a / "detections.json").read_bytes() == (b / "detections.json").read_bytes()
+    assert "timings" not in json.loads((a / "detections.json").read_text())
+    assert set(json.loads((a / "timings.json").read_text())) >= {"segment", "score", "label"}
+
+
+def _snapshot(folder):
+    return {p.name: p.read_bytes() for p in sorted(folder.iterdir())}
+
+
+def test_a_full_disk_is_one_line_and_changes_nothing(room, tmp_path, capsys, monkeypatch):
+    import ontodetect.io._atomic as atomic
+
+    out = tmp_path / "out"
+    assert _detect(room[0], out, "--no-picture") == 0
+    before = _snapshot(out)
+    real_fsync = os.fsync
+
+    def full(fd):
+        if os.readlink(f"/proc/self/fd/{fd}").split("/")[-1].startswith(".labelled.ply."):
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return real_fsync(fd)
+
+    monkeypatch.setattr(atomic.os, "fsync", full)
+    one_line(capsys, _detect(room[0], out, "--no-picture", "--seed", "2"), "labelled.ply", "full")
+    assert _snapshot(out) == before
+    assert [p.name for p in tmp_path.iterdir()] == ["out"], "no staging folder left"
+
+
+def test_a_killed_run_leaves_the_old_result_and_its_leftovers_are_removed(room, tmp_path):
+    out = tmp_path / "out"
+    assert _detect(room[0], out, "--no-picture") == 0
+    before = _snapshot(out)
+    # What a kill leaves: a half-written staging folder, or the old result moved aside.
+    (tmp_path / ".out.staging-abc").mkdir()
+    (tmp_path / ".out.staging-abc" / "detections.json").write_text("{")
+    out.rename(tmp_path / ".out.old-xyz")
+    from ontodetect.io._atomic import _remove_stale
+
+    _remove_stale(tmp_path, "out")
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]
+    assert _snapshot(out) == before
+
+
+def test_a_new_run_replaces_every_file_of_the_old_one(room, tmp_path):
+    out = tmp_path / "out"
+    assert _detect(room[0], out) == 0
+    assert (out / "detections.png").exists()
+    assert _detect(room[0], out, "--no-picture") == 0
+    assert not (out / "detections.png").exists(), "no picture of an older run beside the new"
+
+
+def test_a_folder_with_other_files_keeps_them(room, tmp_path):
+    out = tmp_path / "mine"
+    out.mkdir()
+    (out / "notes.txt").write_text("keep")
+    assert _detect(room[0], out, "--no-picture") == 0
+    assert (out / "notes.txt").read_text() == "keep"
+    assert (out / "detections.json").exists()
