@@ -347,3 +347,146 @@ def test_a_folder_with_other_files_keeps_them(room, tmp_path):
     assert _detect(room[0], out, "--no-picture") == 0
     assert (out / "notes.txt").read_text() == "keep"
     assert (out / "detections.json").exists()
+
+
+# ------------------------------------------------------------------------------------------
+# 2 (end). The part-assignment search: a branch and bound, same results as every combination
+
+
+@pytest.fixture(scope="module")
+def descriptions(room):
+    from ontodetect.config import Config
+    from ontodetect.ontology import builtin_ontology
+    from ontodetect.segment import segment
+    from ontodetect.segment._measure import describe_clusters
+
+    descs = []
+    for name, seed in (("tiny", 1), ("dining_room", 5)):
+        cloud = (
+            room[1] if name == "tiny" else synthesize(name, "rgbd", seed=seed, points=60_000).cloud
+        )
+        seg = segment(cloud, Config(), seed=0, ontology=builtin_ontology())
+        descs.extend(describe_clusters(seg, None))
+    assert len(descs) >= 10
+    return descs
+
+
+def test_branch_and_bound_finds_what_every_combination_finds(descriptions):
+    from ontodetect.ontology import builtin_ontology
+    from ontodetect.ontology._score import score_class
+
+    onto = builtin_ontology()
+    compared = 0
+    for desc in descriptions:
+        for cls in onto.classes:
+            fast = score_class(cls, desc)
+            slow = score_class(cls, desc, search_exhaustively=True)
+            assert fast.assignment == slow.assignment, (cls.name, fast.assignment, slow.assignment)
+            assert fast.log_likelihood == slow.log_likelihood
+            compared += 1
+    assert compared >= 30
+
+
+def test_a_class_with_12_optional_parts_is_scored_in_seconds(descriptions, tmp_path):
+    import time
+
+    from ontodetect.ontology import parse_ontology
+    from ontodetect.ontology._score import score_class
+
+    parts = "".join(
+        f"      p{k}: {{required: false, missing: 0.5, tilt: {{max: {10 + k}}}, "
+        f"height: [{0.1 * k:.1f}, {0.1 * k + 0.5:.1f}]}}\n"
+        for k in range(12)
+    )
+    onto = parse_ontology(ONTOLOGY_HEAD + "  many:\n    parts:\n" + parts)
+    cls = onto.classes[0]
+    start = time.perf_counter()
+    for desc in descriptions:
+        score_class(cls, desc)
+    assert time.perf_counter() - start < 10.0
+
+
+# ------------------------------------------------------------------------------------------
+# 3. Units, outliers and values outside their meaning
+
+
+def test_a_room_in_centimetres_is_scaled_as_centimetres(room, tmp_path):
+    from ontodetect.preprocess import guess_units
+    from ontodetect.preprocess._prepare import guess_scale
+
+    cloud = room[1]
+    assert guess_units(cloud.xyz) == "metres"
+    assert guess_units(cloud.xyz * 100) == "centimetres"
+    assert guess_units(cloud.xyz * 1000) == "millimetres"
+    assert guess_scale(cloud.xyz * 100) == 0.01
+    a, b = tmp_path / "m", tmp_path / "cm"
+    f = write_cloud(tmp_path / "cm.ply", cloud.replace(xyz=cloud.xyz * 100))
+    assert _detect(room[0], a, "--no-picture") == 0
+    assert _detect(f, b, "--no-picture") == 0
+    labels = [
+        sorted(d["label"] for d in json.loads((x / "detections.json").read_text())["detections"])
+        for x in (a, b)
+    ]
+    assert labels[0] and labels[1] == labels[0]
+
+
+def test_one_stray_point_a_kilometre_away_changes_nothing(room, tmp_path):
+    from ontodetect.preprocess import guess_units
+
+    cloud = room[1]
+    xyz = cloud.xyz.copy()
+    xyz[0] = [1000.0, 0.0, 1.0]
+    assert guess_units(xyz) == "metres"
+    f = write_cloud(tmp_path / "stray.ply", cloud.replace(xyz=xyz))
+    a, b = tmp_path / "a", tmp_path / "b"
+    assert _detect(room[0], a, "--no-picture") == 0
+    assert _detect(f, b, "--no-picture") == 0
+    counts = [len(json.loads((x / "detections.json").read_text())["detections"]) for x in (a, b)]
+    assert counts[0] > 0 and counts[1] == counts[0]
+
+
+@pytest.mark.parametrize("value", ["2", "nan", "-0.5"])
+def test_indoor_outside_a_probability(room, tmp_path, capsys, value):
+    one_line(capsys, _detect(room[0], tmp_path / "o", "--indoor", value), "'indoor'", "[0, 1]")
+
+
+def test_room_probability_of_inf(room, tmp_path, capsys):
+    f = tmp_path / "rooms.yaml"
+    f.write_text("office: .inf\n")
+    one_line(capsys, _detect(room[0], tmp_path / "o", "--room-probs", str(f)), "office", "inf")
+
+
+def test_ontology_room_probability_of_inf(room, tmp_path, capsys):
+    f = tmp_path / "o.yaml"
+    f.write_text(
+        ONTOLOGY_HEAD + "  stool:\n    prior: {rooms: {office: .inf}}\n"
+        "    parts:\n      seat: {height: [0.4, 0.8]}\n"
+    )
+    one_line(capsys, _detect(room[0], tmp_path / "o", "--ontology", str(f)), "[classes.stool")
+
+
+def test_unknown_prior_rooms_table(room, tmp_path, capsys):
+    f = tmp_path / "o.yaml"
+    f.write_text(
+        ONTOLOGY_HEAD + "  stool:\n    prior: {rooms: sitting}\n"
+        "    parts:\n      seat: {height: [0.4, 0.8]}\n"
+    )
+    line = one_line(
+        capsys, _detect(room[0], tmp_path / "o", "--ontology", str(f)), "o.yaml", "'sitting'"
+    )
+    assert "[classes.stool.prior.rooms]" in line and "seating" in line
+
+
+def test_yaml_reads_1e_minus_12_as_a_number(tmp_path):
+    from ontodetect.config import Config
+    from ontodetect.ontology import parse_ontology
+
+    f = tmp_path / "c.yaml"
+    f.write_text("cluster:\n  radius: 4e-2\n")
+    assert Config.from_yaml(f).cluster.radius == 0.04
+    onto = parse_ontology(
+        ONTOLOGY_HEAD
+        + "  stool:\n    extra_plane: 1e-12\n    parts:\n      seat: {height: [4e-1, 8E-1]}\n"
+    )
+    assert onto.classes[0].extra_plane == 1e-12
+    assert Config().with_overrides(["cluster.radius=5e-2"]).cluster.radius == 0.05
