@@ -205,7 +205,7 @@ def test_unexpected_exceptions_are_one_line_and_traceback_with_v(room, tmp_path,
     mp = pytest.MonkeyPatch()
     mp.setattr(d, "class_priors", boom)
     try:
-        one_line(capsys, _detect(room[0], tmp_path / "o"), "LookupError", "[red]x[/]")
+        one_line(capsys, _detect(room[0], tmp_path / "o"), "room.ply", "LookupError", "[red]x[/]")
         status = main(["-v", "detect", str(room[0]), "-o", str(tmp_path / "o"), "--votes", "1"])
         assert status == 2
         assert "Traceback" in capsys.readouterr().err
@@ -490,3 +490,39 @@ def test_yaml_reads_1e_minus_12_as_a_number(tmp_path):
     )
     assert onto.classes[0].extra_plane == 1e-12
     assert Config().with_overrides(["cluster.radius=5e-2"]).cluster.radius == 0.05
+
+
+def test_unreadable_folder_simulated_for_root(tmp_path, capsys, monkeypatch):
+    # Root ignores permissions: the PermissionError a user meets is raised by hand.
+    import pathlib
+
+    folder = tmp_path / "locked"
+    folder.mkdir()
+    target = folder / "a.ply"
+    target.write_text("ply\n")
+    real_stat = pathlib.Path.stat
+
+    def stat(self, *a, **k):
+        if self == target:
+            raise PermissionError(13, "Permission denied", str(self))
+        return real_stat(self, *a, **k)
+
+    monkeypatch.setattr(pathlib.Path, "stat", stat)
+    one_line(capsys, main(["info", str(target)]), "a.ply", "permission denied")
+
+
+def test_eval_over_an_unreadable_sub_folder(tmp_path, capsys, monkeypatch):
+    import pathlib
+
+    data = tmp_path / "data"
+    (data / "area_1").mkdir(parents=True)
+    locked = data / "area_1"
+    real_iterdir = pathlib.Path.iterdir
+
+    def iterdir(self):
+        if self == locked:
+            raise PermissionError(13, "Permission denied", str(self))
+        return real_iterdir(self)
+
+    monkeypatch.setattr(pathlib.Path, "iterdir", iterdir)
+    one_line(capsys, main(["eval", str(data), "-o", str(tmp_path / "r")]), "area_1", "permission")

@@ -8,6 +8,7 @@ status 2.
 
 from __future__ import annotations
 
+import os
 import sys
 import traceback
 import warnings
@@ -81,10 +82,10 @@ def main(argv: list[str] | None = None) -> int:
         _say("interrupted", "red", "")
         return 130
     except MemoryError as exc:
-        _fail("out of memory: the input is larger than this machine can hold", exc)
+        _fail(f"{_inputs(argv)}out of memory: the input is larger than this machine can hold", exc)
         return 2
     except RecursionError as exc:
-        _fail("an input is nested too deeply to be read", exc)
+        _fail(f"{_inputs(argv)}an input is nested too deeply to be read", exc)
         return 2
     except OSError as exc:
         _fail(_os_message(exc), exc)
@@ -95,7 +96,7 @@ def main(argv: list[str] | None = None) -> int:
         if callable(show) and isinstance(code, int):
             show(file=sys.stderr)
             return code
-        _fail(f"unexpected {type(exc).__name__}: {exc} (this is a bug; -v shows where)", exc)
+        _fail(f"{_inputs(argv)}unexpected {type(exc).__name__}: {exc} (a bug; -v shows where)", exc)
         return 2
     finally:
         warnings.showwarning = old_show
@@ -115,6 +116,14 @@ def _fail(message: str, exc: BaseException) -> None:
         err_console.print(
             Text("".join(traceback.format_exception(exc))), highlight=False, soft_wrap=True
         )
+
+
+def _inputs(argv: list[str] | None) -> str:
+    """``"while reading a.ply, o.yaml: "``: the files named on the command line, for an
+    error that does not say which one it came from."""
+    args = sys.argv[1:] if argv is None else argv
+    files = [a for a in args if not a.startswith("-") and os.path.isfile(a)]
+    return f"while reading {', '.join(files)}: " if files else ""
 
 
 def _os_message(exc: OSError) -> str:

@@ -272,6 +272,8 @@ def read_cloud(
         p.stat()
     except FileNotFoundError:
         raise ReadError(p, "no such file or folder") from None
+    except PermissionError:
+        raise ReadError(p, "permission denied (a folder on the way cannot be entered)") from None
     except OSError as exc:
         raise ReadError(p, f"cannot be looked at ({exc.strerror or exc})") from None
     fmt = format.lower() if format else detect_format(p)
