@@ -106,7 +106,8 @@ def main(argv: list[str] | None = None) -> int:
 def _say(kind: str, colour: str, message: str) -> None:
     """One line on stderr: a coloured tag, then ``message`` verbatim (never read as markup)."""
     line = Text(f"{kind}: " if message else kind, style=colour)
-    line.append(message)
+    # One line whatever the message holds (a library's multi-line text, a file's newlines).
+    line.append(" ".join(part.strip() for part in message.splitlines()))
     err_console.print(line, highlight=False, soft_wrap=True)
 
 

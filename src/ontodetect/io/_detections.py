@@ -160,5 +160,7 @@ def read_detections(path: str | os.PathLike[str]) -> dict[str, Any]:
         doc = json.loads(text)
     except json.JSONDecodeError as exc:
         raise CorruptFileError(p, f"not valid JSON: {exc.msg} at line {exc.lineno}") from exc
+    except RecursionError:
+        raise CorruptFileError(p, "not valid JSON: nested too deeply") from None
     validate_detections(doc, str(p))
     return doc

@@ -245,7 +245,6 @@ def _read_header(path: Path) -> _Header:
             f"POINTS {points} disagrees with WIDTH x HEIGHT = {width} x {height} = "
             f"{width * height}",
         )
-    check_points(path, points, "the header")
     viewpoint = DEFAULT_VIEWPOINT
     if "VIEWPOINT" in entries:
         words, number = entries["VIEWPOINT"]
@@ -327,6 +326,7 @@ def _read_binary(
             f"truncated: {header.points} points of {record.itemsize} bytes need {need} "
             f"bytes of data, the file holds {max(size - header.data_offset, 0)}",
         )
+    check_points(path, header.points, "the header")
     if packed is None:
         return cloud_from_records(
             path, plan, header.data_offset, record, header.points, _meta(header), on_nonfinite
@@ -386,6 +386,7 @@ def _read_compressed(
                     f"truncated: {compressed} bytes of compressed data declared, "
                     f"{max(present, 0)} present",
                 )
+            check_points(path, header.points, "the header")
             check_bytes(path, expanded, "the binary_compressed data")
             data = fh.read(compressed)
     except OSError as exc:

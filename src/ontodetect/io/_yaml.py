@@ -117,5 +117,13 @@ def describe_yaml_error(exc: yaml.YAMLError) -> str:
     else:
         mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
         line = None if mark is None else mark.line + 1
-    problem = getattr(exc, "problem", None) or str(exc)
+    problem = getattr(exc, "problem", None)
+    if problem is None and isinstance(exc, yaml.reader.ReaderError):
+        # "unacceptable character #x0000: special characters are not allowed", one line.
+        problem = (
+            f"{exc.reason}: character #x{exc.character:04x} at byte {exc.position}"
+            if (isinstance(exc.character, int))
+            else f"{exc.reason} at byte {exc.position}"
+        )
+    problem = " ".join(str(problem or exc).split())
     return (f" (line {line})" if line else "") + f": {problem}"

@@ -28,7 +28,7 @@ import yaml
 
 from ..errors import InvalidOntologyError, ReadError
 from ..io._textfile import read_text
-from ..io._yaml import SafeYamlLoader, YamlError
+from ..io._yaml import SafeYamlLoader, YamlError, describe_yaml_error
 from ._features import CLUSTER_FEATURES, PART_FEATURES, RELATION_FEATURES
 from ._gaussian import Gaussian
 from ._places import room_table_names
@@ -417,7 +417,7 @@ def _load_yaml(text: str, source: str | None) -> tuple[Any, _Lines]:
             line=None if mark is None else mark.line + 1,
         ) from exc
     except yaml.YAMLError as exc:
-        raise InvalidOntologyError(source, f"not valid YAML: {exc}") from exc
+        raise InvalidOntologyError(source, f"not valid YAML{describe_yaml_error(exc)}") from exc
     except _Problem as exc:
         raise InvalidOntologyError(
             source, exc.message, line=exc.line, key=_dotted(exc.path)
