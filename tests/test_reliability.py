@@ -312,7 +312,12 @@ def test_a_full_disk_is_one_line_and_changes_nothing(room, tmp_path, capsys, mon
         return real_fsync(fd)
 
     monkeypatch.setattr(atomic.os, "fsync", full)
-    one_line(capsys, _detect(room[0], out, "--no-picture", "--seed", "2"), "labelled.ply", "full")
+    one_line(
+        capsys,
+        _detect(room[0], out, "--no-picture", "--seed", "2"),
+        "labelled.ply",
+        "No space left",
+    )
     assert _snapshot(out) == before
     assert [p.name for p in tmp_path.iterdir()] == ["out"], "no staging folder left"
 

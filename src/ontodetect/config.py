@@ -572,7 +572,11 @@ class Config:
 
 
 class _Dumper(yaml.SafeDumper):
-    """Block style for sections, flow style for ``[low, high]`` pairs."""
+    """Block style for sections, flow style for ``[low, high]`` pairs; no aliases (the YAML
+    loader refuses them)."""
+
+    def ignore_aliases(self, data: object) -> bool:
+        return True
 
 
 _Dumper.add_representer(

@@ -253,7 +253,7 @@ def load_manifest(path: str | os.PathLike[str]) -> ModelLibrary:
         Naming the manifest, the entry and the key at fault.
     """
     p = Path(path)
-    text = read_text(p, "model manifest")
+    text = read_text(p)
     try:
         doc = load_yaml(text)
     except yaml.YAMLError as exc:

@@ -10,6 +10,7 @@ import yaml
 from rich.text import Text
 
 from ..errors import InvalidParameterError
+from ..io._yaml import load_yaml
 from . import app
 from ._console import console, reporting
 from ._defaults import SENSORS
@@ -29,7 +30,7 @@ def _parse_options(items: list[str]) -> dict[str, Any]:
         if not sep or not name.strip():
             raise InvalidParameterError("option", "NAME=VALUE (e.g. stride=2)", item)
         try:
-            value = yaml.safe_load(text)
+            value = load_yaml(text)
         except yaml.YAMLError:
             value = text
         options[name.strip()] = tuple(value) if isinstance(value, list) else value

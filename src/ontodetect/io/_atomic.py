@@ -84,8 +84,7 @@ def atomic_write(path: str | os.PathLike[str], mode: str = "wb") -> Iterator[IO]
         if isinstance(exc, OSError) and not isinstance(exc, WriteError):
             # A full disk, a quota, a folder where the file should go: one line that names
             # the file; the old file (if any) is untouched.
-            full = " (the disk is full)" if exc.errno == errno.ENOSPC else ""
-            raise WriteError(target, f"cannot write{full} ({exc.strerror or exc})") from None
+            raise WriteError(target, f"cannot write ({exc.strerror or exc})") from None
         raise
 
 
