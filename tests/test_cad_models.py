@@ -335,7 +335,8 @@ def test_manifest_file_errors(tmp_path):
         load_manifest(bad)
     cube = box((1.0, 1.0, 1.0))
     write_mesh(tmp_path / "a.stl", cube.vertices, cube.triangles)
-    bad.write_text(yaml.safe_dump({"models": [{"name": "a", "label": "x", "full": "a.stl"}] * 2}))
+    entry = {"name": "a", "label": "x", "full": "a.stl"}
+    bad.write_text(yaml.safe_dump({"models": [entry, dict(entry)]}))
     with pytest.raises(CorruptFileError, match="used twice"):
         load_manifest(bad)
     (tmp_path / "broken.stl").write_bytes(b"solid x\nfacet normal nonsense\n")

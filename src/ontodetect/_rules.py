@@ -20,7 +20,10 @@ __all__ = [
     "NON_NEGATIVE",
     "ON_NONFINITE",
     "POSITIVE",
+    "PROBABILITY",
+    "SEED",
     "SHARE",
+    "WEIGHT",
     "Boolean",
     "Interval",
     "Nullable",
@@ -183,3 +186,9 @@ ON_NONFINITE = OneOf(("warn", "drop", "raise"))
 SHARE = Interval(0.0, 1.0, "right")
 #: A number of things: workers, passes, neighbours (0 allowed).
 COUNT = Interval(0, math.inf, "left", integer=True)
+#: A random seed: what NumPy's generators accept (0 <= seed < 2**63 here).
+SEED = Interval(0, 2**63, "left", integer=True)
+#: A probability.
+PROBABILITY = Interval(0.0, 1.0, "both")
+#: A weight of a distribution: a finite number >= 0.
+WEIGHT = Interval(0.0, math.inf, "left")

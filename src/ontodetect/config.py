@@ -57,6 +57,7 @@ from ._rules import (
 from .errors import InvalidParameterError, OntoDetectError, ReadError
 from .io._atomic import atomic_write_text
 from .io._textfile import read_text
+from .io._yaml import describe_yaml_error, load_yaml
 
 __all__ = [
     "ANGLE",
@@ -517,12 +518,10 @@ class Config:
     def from_yaml_text(cls, text: str, *, source: str | None = None) -> Config:
         """Parse YAML text; ``source`` names it in error messages."""
         try:
-            data = yaml.safe_load(text)
+            data = load_yaml(text)
         except yaml.YAMLError as exc:
-            mark = getattr(exc, "problem_mark", None)
-            line = f" (line {mark.line + 1})" if mark is not None else ""
             raise ReadError(
-                source or "<config>", f"invalid YAML{line}: {getattr(exc, 'problem', None) or exc}"
+                source or "<config>", f"invalid YAML{describe_yaml_error(exc)}"
             ) from None
         return cls.from_dict(data, source=source)
 
@@ -581,7 +580,11 @@ class Config:
 
 
 class _Dumper(yaml.SafeDumper):
-    """Block style for sections, flow style for ``[low, high]`` pairs."""
+    """Block style for sections, flow style for ``[low, high]`` pairs; no aliases (the YAML
+    loader refuses them)."""
+
+    def ignore_aliases(self, data: object) -> bool:
+        return True
 
 
 _Dumper.add_representer(
@@ -604,7 +607,7 @@ def parse_override(text: str) -> tuple[str, Any]:
     if not sep or not key:
         raise InvalidParameterError("--set", "of the form section.key=value", text)
     try:
-        value = yaml.safe_load(raw) if raw.strip() else None
+        value = load_yaml(raw) if raw.strip() else None
     except yaml.YAMLError:
         value = raw.strip()
     return key, value

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from .cad import fit_detections, write_object_map
+from .cad import ObjectMapFiles, fit_detections, write_object_map
 from .errors import InvalidParameterError
 from .evaluation import (
     Evaluation,
@@ -72,9 +72,19 @@ def run_demo(
     result = detect(cloud, room=prior_room, seed=seed)
     fits = fit_detections(result, seed=seed)
     result = with_cad(result, fits)
-    object_map = write_object_map(fits, out, seed=seed)
+    staged: list[ObjectMapFiles] = []
     files = write_outputs(
-        result, out, title=f"simulated {room} (seed {seed}): {len(result.detections)} objects"
+        result,
+        out,
+        title=f"simulated {room} (seed {seed}): {len(result.detections)} objects",
+        # The object map joins the run's other files: swapped in with them.
+        also=lambda folder: staged.append(write_object_map(fits, folder, seed=seed)),
+    )
+    written = staged[0]
+    object_map = ObjectMapFiles(
+        points=out / written.points.name,
+        glb=None if written.glb is None else out / written.glb.name,
+        mesh=None if written.mesh is None else out / written.mesh.name,
     )
     gts = instances_from_labels(
         cloud.fields["instance"], cloud.fields["class_id"], _EVALUATED, index=cloud.index

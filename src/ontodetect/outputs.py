@@ -1,13 +1,17 @@
 """Writing a detection result: detections.json, a labelled cloud (PLY or LAZ) and a picture.
 
-Every file is written atomically, so an interrupted run never leaves a
-half-written result beside an older complete one.
+The files of one run are written into a staging folder beside the output folder and
+swapped in together at the end (:func:`ontodetect.io.staged_folder`): an interrupted or
+failed run (a full disk) leaves the previous result as it was, never a mix. The seconds
+each stage took go to ``timings.json``, so that detections.json is byte-identical for the
+same input and seed.
 """
 
 from __future__ import annotations
 
+import json
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -16,7 +20,14 @@ import numpy as np
 
 from .cloud import PointCloud
 from .errors import InvalidParameterError
-from .io import EXPORTERS, export_detections, make_folder, read_cloud, write_cloud
+from .io import (
+    EXPORTERS,
+    atomic_write_text,
+    export_detections,
+    read_cloud,
+    staged_folder,
+    write_cloud,
+)
 from .io._detections import write_detections
 from .pipeline import Result, detect
 from .render import BoxDrawing, class_color, render_scene
@@ -151,21 +162,56 @@ def write_outputs(
     title: str | None = None,
     labelled_format: str = "ply",
     exports: tuple[str, ...] = ("boxes",),
+    also: Callable[[Path], object] | None = None,
 ) -> OutputFiles:
-    """Write ``detections.json``, the labelled cloud and ``detections.png`` into ``out_dir``.
+    """Write ``detections.json``, ``timings.json``, the labelled cloud, the exports and
+    ``detections.png`` into ``out_dir``, all or nothing.
 
     The labelled cloud (``labelled.ply``, or ``labelled.laz`` / ``labelled.las`` with
     ``labelled_format``) holds the input points (as read, minus any dropped as NaN)
     coloured by class, with the fields of :func:`labelled_cloud`; the PLY header names
     every class id (``comment ontodetect label 0 chair``). ``exports`` names the
     :data:`ontodetect.io.EXPORTERS` to run beside detections.json (``boxes``: boxes.txt;
-    ``scannet``: the ScanNet benchmark's instance files). docs/outputs.md lists every file.
+    ``scannet``: the ScanNet benchmark's instance files). ``also(folder)``, when given,
+    writes more files of the same run (the CAD object map) into the staging folder, so
+    that they are swapped in with the rest. docs/outputs.md lists every file.
     """
     check_output_options(labelled_format, exports)
-    out = make_folder(out_dir, "output folder")
+    final = Path(out_dir)
+    with staged_folder(final, "output folder") as stage:
+        files = _write_files(
+            result,
+            stage,
+            picture=picture,
+            title=title,
+            labelled_format=labelled_format,
+            exports=exports,
+        )
+        if also is not None:
+            also(stage)
+    return OutputFiles(
+        final / files.detections.name,
+        final / files.labelled.name,
+        None if files.picture is None else final / files.picture.name,
+        tuple(final / p.relative_to(stage) for p in files.exports),
+    )
+
+
+def _write_files(
+    result: Result,
+    out: Path,
+    *,
+    picture: bool,
+    title: str | None,
+    labelled_format: str,
+    exports: tuple[str, ...],
+) -> OutputFiles:
     doc = result.to_dict()
     doc["classes"] = result.class_names
+    # Seconds differ between two runs; the contract file does not.
+    timings = doc.pop("timings", {})
     det_path = write_detections(out / "detections.json", doc)
+    atomic_write_text(out / "timings.json", json.dumps(timings, indent=2) + "\n")
     exported = export_detections(out, doc, tuple(exports))
     label, _ = result.point_labels()
     cloud = result.cloud

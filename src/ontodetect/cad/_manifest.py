@@ -40,6 +40,7 @@ from numpy.typing import NDArray
 from ..errors import CorruptFileError, InvalidParameterError, ReadError
 from ..geometry._mesh import Mesh
 from ..io._textfile import read_text
+from ..io._yaml import describe_yaml_error, load_yaml
 from ..preprocess import AXES
 from ._models import (
     DEFAULT_COLOR,
@@ -254,9 +255,9 @@ def load_manifest(path: str | os.PathLike[str]) -> ModelLibrary:
     p = Path(path)
     text = read_text(p)
     try:
-        doc = yaml.safe_load(text)
+        doc = load_yaml(text)
     except yaml.YAMLError as exc:
-        raise CorruptFileError(p, f"not valid YAML ({exc})") from exc
+        raise CorruptFileError(p, f"not valid YAML{describe_yaml_error(exc)}") from None
     if not isinstance(doc, Mapping):
         raise _fail(p, "top level", "expected a mapping with a 'models' list")
     fmt = doc.get("format", MANIFEST_FORMAT)

@@ -14,6 +14,7 @@ import yaml
 
 from ..config import NON_NEGATIVE, Boolean, Interval, check_param
 from ..errors import InvalidParameterError
+from ..io._yaml import load_yaml
 from ..ontology import Gaussian, parse_ontology
 from ..ontology import sigma_floor as feature_sigma_floor
 from ._settings import (
@@ -330,7 +331,11 @@ def _spec_at(data: dict[str, Any], path: ConstraintPath) -> tuple[Any, Any]:
 
 
 class _Dumper(yaml.SafeDumper):
-    """Flow style for constraint mappings and number lists, block style around them."""
+    """Flow style for constraint mappings and number lists, block style around them; no
+    aliases (the YAML loader refuses them)."""
+
+    def ignore_aliases(self, data: object) -> bool:
+        return True
 
 
 def _represent_dict(dumper: yaml.SafeDumper, data: dict[str, Any]) -> yaml.Node:
@@ -480,7 +485,7 @@ def calibrate_ontology(
     """
 
     ontology = parse_ontology(text, source)
-    data = yaml.safe_load(text)
+    data = load_yaml(text)
     settings = settings or FitSettings()
     proposed = fit_constraints(ontology, values, rooms, settings)
     kept = {p: g for p, g in proposed.items() if groups is None or constraint_group(p) in groups}

@@ -7,12 +7,12 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import yaml
 
 from .._progress import progress
 from ..config import Config
 from ..evaluation._match import Instance, match_instances
 from ..io._layouts import natural_key
+from ..io._yaml import load_yaml
 from ..labeling import label_clusters
 from ..ontology import class_priors, parse_ontology, score_cluster
 from ._gaussian import (
@@ -200,7 +200,7 @@ def select_groups(
     if len(held_rooms) < settings.validation_rooms:
         return accepted, decisions
     base = parse_ontology(text, source)
-    data = yaml.safe_load(text)
+    data = load_yaml(text)
     classes = [c.label for c in base.classes if c.detect]
     classes = list(dict.fromkeys(classes))
     params = _detection_params(base, detect_options or {})

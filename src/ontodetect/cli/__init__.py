@@ -8,14 +8,17 @@ status 2.
 
 from __future__ import annotations
 
+import os
 import sys
+import traceback
 import warnings
 
 import typer
+from rich.text import Text
 
 from .._version import __version__
 from ..errors import OntoDetectError
-from ._console import err_console, setup_output
+from ._console import err_console, setup_output, state
 
 __all__ = ["app", "main"]
 
@@ -116,33 +119,75 @@ def main(argv: list[str] | None = None) -> int:
     argv = fill_optional_values(hoist_global_options(list(sys.argv[1:] if argv is None else argv)))
 
     def _show_warning(message, category, filename, lineno, file=None, line=None):
-        err_console.print(f"[yellow]warning:[/] {message}", highlight=False)
+        _say("warning", "yellow", str(message))
 
     old_show = warnings.showwarning
     warnings.showwarning = _show_warning
     try:
         app(args=argv, prog_name="ontodetect", standalone_mode=False)
     except OntoDetectError as exc:
-        err_console.print(f"[red]error:[/] {exc}", highlight=False, soft_wrap=True)
+        _fail(str(exc), exc)
         return 2
     except typer.Exit as exc:
         return int(exc.exit_code or 0)
     except typer.Abort:
-        err_console.print("[red]aborted[/]")
+        _say("aborted", "red", "")
         return 130
     except KeyboardInterrupt:
-        err_console.print("[red]interrupted[/]")
+        _say("interrupted", "red", "")
         return 130
-    except Exception as exc:  # usage errors from the argument parser
+    except MemoryError as exc:
+        _fail(f"{_inputs(argv)}out of memory: the input is larger than this machine can hold", exc)
+        return 2
+    except RecursionError as exc:
+        _fail(f"{_inputs(argv)}an input is nested too deeply to be read", exc)
+        return 2
+    except OSError as exc:
+        _fail(_os_message(exc), exc)
+        return 2
+    except Exception as exc:  # usage errors from the argument parser, then anything else
         show = getattr(exc, "show", None)
         code = getattr(exc, "exit_code", None)
         if callable(show) and isinstance(code, int):
             show(file=sys.stderr)
             return code
-        raise
+        _fail(f"{_inputs(argv)}unexpected {type(exc).__name__}: {exc} (a bug; -v shows where)", exc)
+        return 2
     finally:
         warnings.showwarning = old_show
     return 0
+
+
+def _say(kind: str, colour: str, message: str) -> None:
+    """One line on stderr: a coloured tag, then ``message`` verbatim (never read as markup)."""
+    line = Text(f"{kind}: " if message else kind, style=colour)
+    # One line whatever the message holds (a library's multi-line text, a file's newlines).
+    line.append(" ".join(part.strip() for part in message.splitlines()))
+    err_console.print(line, highlight=False, soft_wrap=True)
+
+
+def _fail(message: str, exc: BaseException) -> None:
+    _say("error", "red", message)
+    if state.verbose and not isinstance(exc, OntoDetectError):
+        err_console.print(
+            Text("".join(traceback.format_exception(exc))), highlight=False, soft_wrap=True
+        )
+
+
+def _inputs(argv: list[str] | None) -> str:
+    """``"while reading a.ply, o.yaml: "``: the files named on the command line, for an
+    error that does not say which one it came from."""
+    args = sys.argv[1:] if argv is None else argv
+    files = [a for a in args if not a.startswith("-") and os.path.isfile(a)]
+    return f"while reading {', '.join(files)}: " if files else ""
+
+
+def _os_message(exc: OSError) -> str:
+    """``path: problem`` from an OSError that escaped the readers and writers."""
+    what = exc.strerror or str(exc) or type(exc).__name__
+    if exc.filename is not None:
+        return f"{exc.filename}: {what}"
+    return what
 
 
 def _entry() -> None:  # pragma: no cover - console script

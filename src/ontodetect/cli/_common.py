@@ -10,6 +10,7 @@ import yaml
 from ..config import Config
 from ..errors import InvalidParameterError, ReadError
 from ..io._textfile import read_text
+from ..io._yaml import describe_yaml_error, load_yaml
 
 if TYPE_CHECKING:
     from ..ontology import Ontology
@@ -58,11 +59,13 @@ def room_option(room: str | None, room_probs: Path | None) -> str | dict[str, An
         raise InvalidParameterError("--room-probs", "not combined with --room", str(room_probs))
     if room_probs is None:
         return room
-    text = read_text(room_probs)
+    text = read_text(room_probs, "room probability file")
     try:
-        data = yaml.safe_load(text)
+        data = load_yaml(text)
     except yaml.YAMLError as exc:
-        raise ReadError(room_probs, f"not a readable YAML/JSON mapping ({exc})") from exc
+        raise ReadError(
+            room_probs, f"not a readable YAML/JSON mapping{describe_yaml_error(exc)}"
+        ) from None
     if not isinstance(data, dict):
         raise ReadError(room_probs, "expected a mapping of room category to probability")
     return data

@@ -22,12 +22,21 @@ PIPE_WIDTH = 100_000
 
 
 def _console(stderr: bool = False) -> Console:
-    """A console that wraps and colours for a terminal, and neither for a pipe or a file."""
-    c = Console(stderr=stderr, highlight=False)
+    """A console that wraps and colours for a terminal, and neither for a pipe or a file.
+
+    Markup is off: paths, file contents and keys such as ``[classes.chair.parts.seat]`` are
+    printed verbatim; our own styling goes through ``rich.text.Text``.
+    """
+    c = Console(stderr=stderr, highlight=False, markup=False)
     if c.is_terminal:
         return c
     return Console(
-        stderr=stderr, highlight=False, width=PIPE_WIDTH, soft_wrap=True, color_system=None
+        stderr=stderr,
+        highlight=False,
+        markup=False,
+        width=PIPE_WIDTH,
+        soft_wrap=True,
+        color_system=None,
     )
 
 

@@ -9,8 +9,8 @@ from typing import TYPE_CHECKING
 import typer
 from rich.table import Table
 
-from ..errors import InvalidParameterError, WriteError
-from ..io import atomic_write, read_cloud
+from ..errors import InvalidParameterError
+from ..io import atomic_write, read_cloud, staged_folder
 from ..io._detections import read_detections, write_detections
 from . import app
 from ._console import console, reporting, state
@@ -81,12 +81,13 @@ def fit(
         )
         for det, f in zip(doc["detections"], fits):
             det["cad"] = cad_dict(f)
-        try:
-            out.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise WriteError(out, f"cannot create the folder ({exc.strerror})") from exc
-        js = write_detections(out / "detections.json", doc)
-        files = write_object_map(fits, out, spacing=spacing, seed=seed, glb=glb)
+        with staged_folder(out, "output folder") as stage:
+            write_detections(stage / "detections.json", doc)
+            staged = write_object_map(fits, stage, spacing=spacing, seed=seed, glb=glb)
+        js = out / "detections.json"
+        written = [js] + [
+            out / Path(p).name for p in (staged.points, staged.glb, staged.mesh) if p is not None
+        ]
     if state.quiet:
         return
     table = Table(title=f"{path.name}: {len(fits)} objects")
@@ -104,7 +105,6 @@ def fit(
             f.reason,
         )
     console.print(table)
-    written = [js, files.points] + [p for p in (files.glb, files.mesh) if p is not None]
     console.print("wrote " + ", ".join(str(p) for p in written))
 
 

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import typer
 from rich.table import Table
+from rich.text import Text
 
 from ..io import atomic_write_text
 from ..io._layouts import DATASET_FORMATS
@@ -147,20 +148,22 @@ def calibrate(
         + (f" (no cluster with IoU >= 0.25: {skipped})" if skipped else "")
     )
     for line in result.failed:
-        console.print(f"[yellow]skipped[/] {line}")
+        console.print(Text.assemble(("skipped", "yellow"), f" {line}"))
     kept = [d.name for d in result.decisions if d.accepted]
     if not result.too_few_rooms:
         # Said in every case: a file that silently equals the original reads as calibrated.
         style = "bold yellow" if result.settings.validate and not kept else "bold"
         console.print(
-            f"[{style}]nested check:[/] {result.check}"
-            + (f" Kept: {', '.join(kept)}." if kept else ""),
+            Text.assemble(
+                ("nested check:", style),
+                f" {result.check}" + (f" Kept: {', '.join(kept)}." if kept else ""),
+            ),
             highlight=False,
         )
     if state.verbose:
         for d in result.decisions:
-            mark = "[green]kept[/]" if d.accepted else "rejected"
-            console.print(f"  {mark} {d.name}: {d.reason}", highlight=False)
+            mark = ("kept", "green") if d.accepted else "rejected"
+            console.print(Text.assemble("  ", mark, f" {d.name}: {d.reason}"), highlight=False)
     changed = [f for f in result.fits if f.changed]
     table = Table(title=f"{len(changed)} of {len(result.fits)} constraints calibrated")
     for col in ("constraint", "n", "before", "after"):

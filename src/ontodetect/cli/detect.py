@@ -8,6 +8,7 @@ from pathlib import Path
 
 import typer
 from rich.table import Table
+from rich.text import Text
 
 from ..cloud import as_position
 from ..errors import OntoDetectError
@@ -191,17 +192,23 @@ def detect(
 
             fits = fit_detections(result, seed=seed, ontology=onto)
             result = with_cad(result, fits)
+
+            def also(folder: Path) -> object:
+                return write_object_map(fits, folder, seed=seed)
+        else:
+            also = None
         files = write_outputs(
             result,
             out,
             picture=picture,
             labelled_format=labelled_format.lower(),
             exports=exports,
+            also=also,
         )
-        if cad:
-            object_map = write_object_map(fits, out, seed=seed)
+        object_map = also
     if as_json:
         doc = result.to_dict()
+        doc.pop("timings", None)
         doc["classes"] = result.class_names
         doc["files"] = [
             str(p)
@@ -238,7 +245,7 @@ def detect(
         + (", object_map.ply, object_map.glb" if object_map is not None else "")
     )
     if state.verbose:
-        console.print(json.dumps(result.to_dict()["timings"]))
+        console.print(json.dumps(result.to_dict()["timings"]), soft_wrap=True)
 
 
 def _scan_names(inputs: list[Path]) -> list[str]:
@@ -294,7 +301,7 @@ def _detect_many(inputs, out, *, jobs, as_json, format, detect_options, **write_
             table.add_row(r["input"], str(r.get("objects", "failed")), r["out"])
         console.print(table)
     for r in failed:
-        console.print(f"[red]failed[/] {r['input']}: {r['error']}")
+        console.print(Text.assemble(("failed", "red"), f" {r['input']}: {r['error']}"))
     if failed:
         raise typer.Exit(2)
 
@@ -305,7 +312,7 @@ def _print_explain(rows) -> None:
             f"cluster {row['cluster']}: {row['num_points']} points, {row['planes']} planes"
             f" -> {row['label'] or 'no label'}" + (f" ({row['reason']})" if row["reason"] else "")
         )
-        console.print(f"[bold]{head}[/]")
+        console.print(Text(head, style="bold"))
         for o in row.get("beat", []):
             why = "no label" if o["label"] is None else f"{o['label']}, weight {o['weight']:.2f}"
             console.print(f"  beat a candidate of {o['source']} ({o['num_voxels']} voxels): {why}")

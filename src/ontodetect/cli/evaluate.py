@@ -7,6 +7,7 @@ from pathlib import Path
 
 import typer
 from rich.table import Table
+from rich.text import Text
 
 from ..io._layouts import DATASET_FORMATS
 from . import app
@@ -192,6 +193,6 @@ def eval_(
         f"{'s' if result.jobs != 1 else ''})"
     )
     for s in result.failed:
-        console.print(f"[yellow]skipped[/] {s.name}: {s.error}")
+        console.print(Text.assemble(("skipped", "yellow"), f" {s.name}: {s.error}"))
     if files is not None:
         console.print(f"wrote {files.markdown}, {files.json}, {files.pr_curves}, {files.confusion}")

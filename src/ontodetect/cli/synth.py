@@ -7,8 +7,10 @@ from typing import Any
 
 import typer
 import yaml
+from rich.text import Text
 
 from ..errors import InvalidParameterError
+from ..io._yaml import load_yaml
 from . import app
 from ._console import console, reporting
 from ._defaults import SENSORS
@@ -28,7 +30,7 @@ def _parse_options(items: list[str]) -> dict[str, Any]:
         if not sep or not name.strip():
             raise InvalidParameterError("option", "NAME=VALUE (e.g. stride=2)", item)
         try:
-            value = yaml.safe_load(text)
+            value = load_yaml(text)
         except yaml.YAMLError:
             value = text
         options[name.strip()] = tuple(value) if isinstance(value, list) else value
@@ -94,8 +96,8 @@ def synth(
     furnished = furnished or catalog is not None
     if list_:
         kinds = FURNISHED_ROOM_TYPES if furnished else room_types()
-        console.print("[bold]room types[/]: " + ", ".join(kinds))
-        console.print("[bold]sensors[/]:")
+        console.print(Text.assemble(("room types", "bold"), ": " + ", ".join(kinds)))
+        console.print(Text.assemble(("sensors", "bold"), ":"))
         for name in SENSORS:
             console.print(f"  {name:<11} {_SENSOR_HELP[name]}")
             console.print(f"  {'':<11} options: {', '.join(sensor_options(name))}", style="dim")

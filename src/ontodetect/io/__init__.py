@@ -23,7 +23,14 @@ from typing import Any
 
 from ..cloud import PointCloud
 from ..errors import ReadError, UnsupportedFormatError, WriteError
-from ._atomic import atomic_write, atomic_write_bytes, atomic_write_text, make_folder
+from ._atomic import (
+    RUN_MARKER,
+    atomic_write,
+    atomic_write_bytes,
+    atomic_write_text,
+    make_folder,
+    staged_folder,
+)
 from ._detections import (
     DETECTIONS_FORMAT,
     detections_schema,
@@ -41,6 +48,7 @@ from ._exports import (
 )
 from ._inputs import expand_inputs as _expand_inputs
 from ._layouts import DATASET_FORMATS
+from ._textfile import regular_file
 
 __all__ = [
     "DATASET_FORMATS",
@@ -48,6 +56,7 @@ __all__ = [
     "EXPORTERS",
     "FORMATS",
     "READERS",
+    "RUN_MARKER",
     "WRITERS",
     "FormatInfo",
     "atomic_write",
@@ -62,6 +71,7 @@ __all__ = [
     "read_cloud",
     "read_detections",
     "read_scannet_instances",
+    "staged_folder",
     "supported_formats",
     "validate_detections",
     "write_box_table",
@@ -284,16 +294,29 @@ def read_cloud(
         The file is missing, unreadable, corrupt, or of an unsupported format.
     """
     p = Path(path)
-    if not p.exists():
-        raise ReadError(p, "no such file or folder")
+    try:
+        p.stat()
+    except FileNotFoundError:
+        raise ReadError(p, "no such file or folder") from None
+    except PermissionError:
+        raise ReadError(p, "permission denied (a folder on the way cannot be entered)") from None
+    except OSError as exc:
+        raise ReadError(p, f"cannot be looked at ({exc.strerror or exc})") from None
     fmt = format.lower() if format else detect_format(p)
     if fmt not in FORMATS or FORMATS[fmt].reader is None:
         raise UnsupportedFormatError(p, f"unknown format {format!r}", supported_formats())
-    if p.is_dir() and fmt not in ("scannet", "s3dis", "3dtk"):
-        raise ReadError(p, f"is a folder, but format {fmt!r} reads a single file")
-    if p.is_file() and not os.access(p, os.R_OK):
-        raise ReadError(p, "permission denied")
-    cloud = READERS[fmt](p, **options)
+    if p.is_dir():
+        if fmt not in ("scannet", "s3dis", "3dtk"):
+            raise ReadError(p, f"is a folder, but format {fmt!r} reads a single file")
+        if not os.access(p, os.R_OK | os.X_OK):
+            raise ReadError(p, "permission denied (the folder cannot be listed)")
+    else:
+        # Before opening: a FIFO would block and /dev/zero never ends.
+        regular_file(p, f"{fmt} file")
+    try:
+        cloud = READERS[fmt](p, **options)
+    except PermissionError as exc:
+        raise ReadError(exc.filename or p, "permission denied") from None
     meta = {"source": str(p), "format": fmt}
     meta.update({k: v for k, v in cloud.meta.items() if k not in meta})
     return cloud.with_meta(**meta)

@@ -1,9 +1,12 @@
-"""Atomic file writes: a temporary file beside the target, then a rename."""
+"""Atomic writes: a file through a temporary file beside it and a rename; a folder of
+files (one run's outputs) through a staging folder beside it that is swapped in whole."""
 
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
+import shutil
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
@@ -11,7 +14,18 @@ from typing import IO
 
 from ..errors import WriteError
 
-__all__ = ["atomic_write", "atomic_write_bytes", "atomic_write_text", "make_folder"]
+__all__ = [
+    "RUN_MARKER",
+    "atomic_write",
+    "atomic_write_bytes",
+    "atomic_write_text",
+    "make_folder",
+    "staged_folder",
+]
+
+#: Written into an output folder by :func:`staged_folder`: the names of the files of the
+#: run that wrote it, one a line. A folder holding nothing else is replaced whole.
+RUN_MARKER = ".ontodetect-run"
 
 
 def make_folder(path: str | os.PathLike[str], what: str = "folder") -> Path:
@@ -64,9 +78,13 @@ def atomic_write(path: str | os.PathLike[str], mode: str = "wb") -> Iterator[IO]
         # mkstemp makes the file private; give it the permissions a plain open() would.
         os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, target)
-    except BaseException:
+    except BaseException as exc:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
+        if isinstance(exc, OSError) and not isinstance(exc, WriteError):
+            # A full disk, a quota, a folder where the file should go: one line that names
+            # the file; the old file (if any) is untouched.
+            raise WriteError(target, f"cannot write ({exc.strerror or exc})") from None
         raise
 
 
@@ -88,3 +106,104 @@ def atomic_write_text(path: str | os.PathLike[str], text: str) -> Path:
     with atomic_write(path, "w") as fh:
         fh.write(text)
     return Path(path)
+
+
+def _remove_stale(parent: Path, name: str) -> None:
+    """Remove what an interrupted run left beside ``parent / name``: staging folders, and
+    the previous result moved aside (put back when the new one never arrived)."""
+    out = parent / name
+    stale = sorted(parent.glob(f".{name}.staging-*")) + sorted(parent.glob(f".{name}.old-*"))
+    for entry in stale:
+        if entry.name.startswith(f".{name}.old-") and not out.exists():
+            with contextlib.suppress(OSError):
+                os.rename(entry, out)
+                continue
+        if entry.is_dir() and not entry.is_symlink():
+            shutil.rmtree(entry, ignore_errors=True)
+        else:
+            with contextlib.suppress(OSError):
+                entry.unlink()
+
+
+def _run_files(folder: Path) -> set[str] | None:
+    """Names listed by the folder's run marker; None without a readable marker."""
+    try:
+        text = (folder / RUN_MARKER).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError):
+        return None
+    return {line for line in text.splitlines() if line}
+
+
+def _commit(stage: Path, out: Path, what: str) -> None:
+    names = sorted(p.name for p in stage.iterdir())
+    (stage / RUN_MARKER).write_text("".join(f"{n}\n" for n in names), encoding="utf-8")
+    if not out.exists() and not out.is_symlink():
+        os.rename(stage, out)
+        return
+    if not out.is_dir() or out.is_symlink():
+        raise WriteError(out, f"the {what} is not a folder")
+    present = {p.name for p in out.iterdir()}
+    ours = _run_files(out)
+    if ours is not None and present <= ours | {RUN_MARKER}:
+        # Only an earlier run's files: swap the folders. Killed between the two renames,
+        # the next run puts the old folder back (_remove_stale).
+        old = Path(tempfile.mkdtemp(prefix=f".{out.name}.old-", dir=out.parent))
+        os.rmdir(old)
+        os.rename(out, old)
+        os.rename(stage, out)
+        shutil.rmtree(old, ignore_errors=True)
+        return
+    # A folder with other files too (the user's): replace our files one by one, checked
+    # first so that nothing is changed when one cannot be, and the marker last.
+    for n in names:
+        target = out / n
+        if target.is_dir() and not target.is_symlink():
+            raise WriteError(target, "a folder is in the way of this output file")
+    for n in names:
+        os.replace(stage / n, out / n)
+    for n in sorted((ours or set()) - set(names) - {RUN_MARKER}):
+        with contextlib.suppress(OSError):
+            (out / n).unlink()
+    os.replace(stage / RUN_MARKER, out / RUN_MARKER)
+    shutil.rmtree(stage, ignore_errors=True)
+
+
+@contextlib.contextmanager
+def staged_folder(path: str | os.PathLike[str], what: str = "output folder") -> Iterator[Path]:
+    """Write the files of one run into a staging folder beside ``path``; on success they
+    replace ``path``'s as one unit, on any failure nothing in ``path`` has changed.
+
+    A folder that holds only an earlier run's files (listed in its :data:`RUN_MARKER`) is
+    swapped whole; a folder with other files keeps them, and our files are replaced after
+    checking that each can be. Staging folders left by a killed run are removed first.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> out = pathlib.Path(tempfile.mkdtemp()) / "result"
+    >>> with staged_folder(out) as stage:
+    ...     _ = (stage / "a.txt").write_text("new")
+    >>> sorted(p.name for p in out.iterdir())
+    ['.ontodetect-run', 'a.txt']
+    """
+    out = Path(path)
+    parent = make_folder(out.parent if str(out.parent) else Path("."), what)
+    _remove_stale(parent, out.name)
+    if out.exists() and not out.is_dir():
+        raise WriteError(out, f"the {what} is a file, not a folder")
+    try:
+        stage = Path(tempfile.mkdtemp(prefix=f".{out.name}.staging-", dir=parent))
+    except OSError as exc:
+        raise WriteError(out, f"cannot create the {what} ({exc.strerror or exc})") from None
+    try:
+        yield stage
+        _commit(stage, out, what)
+    except BaseException as exc:
+        shutil.rmtree(stage, ignore_errors=True)
+        if isinstance(exc, OSError) and not isinstance(exc, WriteError):
+            full = " (the disk is full)" if exc.errno == errno.ENOSPC else ""
+            where = str(exc.filename or out).replace(str(stage), str(out))
+            raise WriteError(
+                where, f"cannot write the {what}{full} ({exc.strerror or exc})"
+            ) from None
+        raise

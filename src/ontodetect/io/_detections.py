@@ -18,6 +18,7 @@ from typing import Any
 from ..errors import CorruptFileError
 from ..geometry import jsonable
 from ._atomic import atomic_write_text
+from ._budget import MAX_COORDINATE, MAX_EXTENT
 from ._textfile import read_text
 
 __all__ = [
@@ -108,6 +109,35 @@ def validate_detections(doc: Any, source: str = "detections.json") -> None:
             or not isinstance(box.get("yaw"), (int, float))
         ):
             raise _fail(source, f"{where}.box", "expected {center: [3], size: [3], yaw}")
+        if not all(abs(v) <= MAX_COORDINATE for v in [*box["center"], box["yaw"]]):
+            raise _fail(
+                source,
+                f"{where}.box",
+                f"center and yaw must be finite and within {MAX_COORDINATE:.0e}, got "
+                f"{box['center']!r} and {box['yaw']!r}",
+            )
+        if not all(0 <= v <= MAX_EXTENT for v in box["size"]):
+            raise _fail(
+                source,
+                f"{where}.box.size",
+                f"each side must lie in [0, {MAX_EXTENT:.0e}] (what a building can span), "
+                f"got {box['size']!r}",
+            )
+        parts = det.get("parts", [])
+        if not isinstance(parts, list) or not all(
+            isinstance(p, dict) and isinstance(p.get("name"), str) for p in parts
+        ):
+            raise _fail(
+                source, f"{where}.parts", f"expected a list of {{name, ...}}, got {parts!r}"
+            )
+        for j, part in enumerate(parts):
+            for key, size in (("normal", 3), ("centroid", 3), ("extent", 2)):
+                if key in part and not _vec(part[key], size):
+                    raise _fail(
+                        source,
+                        f"{where}.parts[{j}].{key}",
+                        f"expected {size} numbers, got {part[key]!r}",
+                    )
         pts = det.get("point_indices")
         if not isinstance(pts, list) or not all(isinstance(i, int) for i in pts):
             raise _fail(source, f"{where}.point_indices", "expected a list of integers")
@@ -130,5 +160,7 @@ def read_detections(path: str | os.PathLike[str]) -> dict[str, Any]:
         doc = json.loads(text)
     except json.JSONDecodeError as exc:
         raise CorruptFileError(p, f"not valid JSON: {exc.msg} at line {exc.lineno}") from exc
+    except RecursionError:
+        raise CorruptFileError(p, "not valid JSON: nested too deeply") from None
     validate_detections(doc, str(p))
     return doc

@@ -27,6 +27,7 @@ from .._progress import progress
 from ..cloud import PointCloud, point_cloud
 from ..errors import CorruptFileError, InvalidParameterError, ReadError, WriteError
 from ._atomic import atomic_write
+from ._budget import check_points
 
 __all__ = ["read_las", "write_las"]
 
@@ -218,7 +219,8 @@ def _laspy_errors() -> tuple[type[BaseException], ...]:
         struct.error,
         IndexError,
         KeyError,
-        OverflowError,
+        # OverflowError, and ZeroDivisionError from an extra-bytes descriptor of type 0.
+        ArithmeticError,
         AttributeError,
         RuntimeError,
         # A damaged count can still ask for an impossible allocation.
@@ -331,6 +333,7 @@ def read_las(path: Path, *, on_nonfinite: str = "warn") -> PointCloud:
         count = int(header.point_count)
         if count <= 0:
             raise CorruptFileError(path, "contains no points (the header says 0)")
+        check_points(path, count, "the header")
         record = int(fmt.size)
         scales, offsets = np.asarray(header.scales), np.asarray(header.offsets)
         if not (

@@ -160,7 +160,12 @@ def discover_scenes(path: str | os.PathLike[str], format: str = "auto") -> list[
         raise UnsupportedFormatError(
             p, "is not a scene of a known dataset layout", list(DATASET_FORMATS[1:])
         )
-    found = _scenes_in(p, p, fmt, 0)
+    try:
+        found = _scenes_in(p, p, fmt, 0)
+    except PermissionError as exc:
+        raise ReadError(
+            exc.filename or p, "permission denied (a folder of the dataset cannot be listed)"
+        ) from None
     if not found:
         what = "any known layout" if fmt == "auto" else f"the {fmt!r} layout"
         raise ReadError(

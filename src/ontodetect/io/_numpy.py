@@ -38,6 +38,7 @@ from numpy.typing import NDArray
 
 from ..cloud import DataWarning, PointCloud
 from ..errors import CorruptFileError, ReadError, WriteError
+from ._budget import check_bytes, check_points
 from ._ply import (
     ColumnPlan,
     check_on_nonfinite,
@@ -111,8 +112,11 @@ def _npy_header(path: Path, fh: IO[bytes], what: str) -> tuple[np.dtype, tuple[i
     return dtype, shape, fortran
 
 
-def _npy_array(path: Path, fh: IO[bytes], available: int, what: str) -> NDArray[Any]:
-    """Load one .npy array from ``fh`` after checking its size against ``available`` bytes."""
+def _npy_array(
+    path: Path, fh: IO[bytes], available: int, what: str, spent: int = 0
+) -> NDArray[Any]:
+    """Load one .npy array from ``fh`` after checking its size against ``available`` bytes
+    and, with ``spent`` bytes already taken by earlier arrays, against the memory budget."""
     start = fh.tell()
     dtype, shape, fortran = _npy_header(path, fh, what)
     count = math.prod(shape)
@@ -124,6 +128,9 @@ def _npy_array(path: Path, fh: IO[bytes], available: int, what: str) -> NDArray[
             f"{what}: truncated, shape {shape} of {dtype} needs {need} bytes, "
             f"{max(left, 0)} present",
         )
+    if shape:
+        check_points(path, shape[0], what)
+    check_bytes(path, spent + need, what)
     data = fh.read(need)
     if len(data) < need:
         raise CorruptFileError(path, f"{what}: truncated, {need} bytes needed, {len(data)} read")
@@ -228,6 +235,7 @@ def read_npy(path: Path, *, on_nonfinite: str = "warn") -> PointCloud:
 
 def _npz_arrays(path: Path) -> dict[str, NDArray[Any]]:
     arrays: dict[str, NDArray[Any]] = {}
+    spent = 0
     try:
         with zipfile.ZipFile(path) as archive:
             for info in archive.infolist():
@@ -243,9 +251,11 @@ def _npz_arrays(path: Path) -> dict[str, NDArray[Any]]:
                         f"{info.file_size})",
                     )
                 with archive.open(info) as member:
-                    # Reading at most the declared size bounds memory by the file size.
-                    data = member.read(info.file_size)
-                arrays[key] = _npy_array(path, io.BytesIO(data), len(data), what)
+                    # The member's .npy header is read first and its shape checked against
+                    # the budget before anything is decompressed; reading at most the
+                    # declared size bounds the rest.
+                    arrays[key] = _npy_array(path, member, info.file_size, what, spent)
+                spent += arrays[key].nbytes
     except (
         zipfile.BadZipFile,
         zlib.error,

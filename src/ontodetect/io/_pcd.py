@@ -36,6 +36,7 @@ from numpy.typing import NDArray
 from .._progress import progress
 from ..cloud import PointCloud
 from ..errors import CorruptFileError, InvalidParameterError, ReadError, WriteError
+from ._budget import check_bytes, check_points
 from ._ply import (
     HEADER_MAX_BYTES,
     Column,
@@ -227,7 +228,7 @@ def _read_header(path: Path) -> _Header:
     width_w = entries.get("WIDTH", ([], 0))
     height_w = entries.get("HEIGHT", (["1"], 0))
     for key, (words, number) in (("WIDTH", width_w), ("HEIGHT", height_w), ("POINTS", points_w)):
-        if words and len(words) != 1:
+        if (words or key in entries) and len(words) != 1:
             raise CorruptFileError(path, f"header line {number}: {key} should be one number")
     if not points_w[0] and not width_w[0]:
         raise CorruptFileError(path, "the header has neither WIDTH nor POINTS")
@@ -325,6 +326,7 @@ def _read_binary(
             f"truncated: {header.points} points of {record.itemsize} bytes need {need} "
             f"bytes of data, the file holds {max(size - header.data_offset, 0)}",
         )
+    check_points(path, header.points, "the header")
     if packed is None:
         return cloud_from_records(
             path, plan, header.data_offset, record, header.points, _meta(header), on_nonfinite
@@ -359,6 +361,8 @@ def _read_compressed(
         with open(path, "rb") as fh:
             fh.seek(header.data_offset)
             sizes = fh.read(8)
+            present = fh.seek(0, 2) - header.data_offset - 8
+            fh.seek(header.data_offset + 8)
             if len(sizes) < 8:
                 raise CorruptFileError(path, "truncated: the compressed data sizes are missing")
             compressed, expanded = struct.unpack("<II", sizes)
@@ -375,6 +379,15 @@ def _read_compressed(
                     f"binary_compressed sizes are implausible "
                     f"({compressed} bytes claimed to expand to {expanded})",
                 )
+            if compressed > present:
+                # Checked before reading: a read of the declared size allocates it first.
+                raise CorruptFileError(
+                    path,
+                    f"truncated: {compressed} bytes of compressed data declared, "
+                    f"{max(present, 0)} present",
+                )
+            check_points(path, header.points, "the header")
+            check_bytes(path, expanded, "the binary_compressed data")
             data = fh.read(compressed)
     except OSError as exc:
         raise ReadError(path, f"cannot read ({exc.strerror or exc})") from exc

@@ -9,14 +9,12 @@ serves when only that is known. Without information the prior is 1.
 
 from __future__ import annotations
 
-import functools
 from collections.abc import Mapping
-from importlib import resources
 from typing import Any
 
-import yaml
-
+from .._rules import PROBABILITY, WEIGHT, check_param
 from ..errors import InvalidParameterError
+from ._places import places_data, room_table_names
 from ._schema import ObjectClass, Ontology
 
 __all__ = [
@@ -28,10 +26,8 @@ __all__ = [
 ]
 
 
-@functools.cache
 def _data() -> dict[str, Any]:
-    text = resources.files("ontodetect").joinpath("data/places205.yaml").read_text("utf-8")
-    return yaml.safe_load(text)
+    return places_data()
 
 
 def room_categories() -> list[str]:
@@ -42,9 +38,8 @@ def room_categories() -> list[str]:
 def room_table(name: str) -> dict[str, float]:
     """A shipped table P(object | category), e.g. ``"seating"`` (Table 4.10)."""
     cats = _data()["categories"]
-    if name not in next(iter(cats.values())):
-        known = sorted(next(iter(cats.values())))
-        raise InvalidParameterError("prior.rooms", f"one of {known}", name)
+    if name not in room_table_names():
+        raise InvalidParameterError("prior.rooms", f"one of {room_table_names()}", name)
     return {c: float(v[name]) for c, v in cats.items()}
 
 
@@ -85,12 +80,7 @@ def room_distribution(room: str | Mapping[str, float] | None) -> dict[str, float
         key = str(k).strip().lower().replace("-", "_").replace(" ", "_")
         if key not in cats:
             raise InvalidParameterError("room", f"keyed by categories ({', '.join(cats)})", k)
-        try:
-            w = float(v)
-        except (TypeError, ValueError):
-            raise InvalidParameterError(f"room[{k!r}]", "a number >= 0", v) from None
-        if not w >= 0:
-            raise InvalidParameterError(f"room[{k!r}]", "a number >= 0", v)
+        w = check_param(f"room[{k!r}]", WEIGHT, v)
         weights[key] = weights.get(key, 0.0) + w
     total = sum(weights.values())
     if total <= 0:
@@ -125,5 +115,7 @@ def class_priors(
     indoor: float | None = None,
 ) -> dict[str, float]:
     """P_obj for every class of an ontology."""
+    if indoor is not None:
+        indoor = check_param("indoor", PROBABILITY, indoor)
     rooms = room_distribution(room)
     return {c.name: object_prior(c, rooms, indoor) for c in ontology.classes}

@@ -26,9 +26,12 @@ from typing import Any
 
 import yaml
 
-from ..errors import InvalidOntologyError
+from ..errors import InvalidOntologyError, ReadError
+from ..io._textfile import read_text
+from ..io._yaml import SafeYamlLoader, YamlError, describe_yaml_error
 from ._features import CLUSTER_FEATURES, PART_FEATURES, RELATION_FEATURES
 from ._gaussian import Gaussian
+from ._places import room_table_names
 
 __all__ = [
     "CAD_ROLES",
@@ -398,12 +401,14 @@ class _Problem(Exception):
 def _load_yaml(text: str, source: str | None) -> tuple[Any, _Lines]:
     lines = _Lines()
     try:
-        loader = yaml.SafeLoader(text)
+        loader = SafeYamlLoader(text)
         try:
             node = loader.get_single_node()
             data = None if node is None else _construct(node, (), lines, loader)
         finally:
             loader.dispose()
+    except YamlError as exc:
+        raise InvalidOntologyError(source, exc.problem, line=exc.line) from exc
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         raise InvalidOntologyError(
@@ -412,7 +417,7 @@ def _load_yaml(text: str, source: str | None) -> tuple[Any, _Lines]:
             line=None if mark is None else mark.line + 1,
         ) from exc
     except yaml.YAMLError as exc:
-        raise InvalidOntologyError(source, f"not valid YAML: {exc}") from exc
+        raise InvalidOntologyError(source, f"not valid YAML{describe_yaml_error(exc)}") from exc
     except _Problem as exc:
         raise InvalidOntologyError(
             source, exc.message, line=exc.line, key=_dotted(exc.path)
@@ -706,6 +711,12 @@ def _prior(spec: Any, path: tuple[Any, ...]) -> tuple[Any, float | None, float |
     spec = _mapping(spec, path)
     _only(spec, {"rooms", "indoor", "outdoor"}, path)
     rooms = spec.get("rooms")
+    if isinstance(rooms, str) and rooms not in room_table_names():
+        raise _Problem(
+            path + ("rooms",),
+            f"expected the name of a shipped table ({', '.join(room_table_names())}) "
+            f"or a mapping room -> probability, got {rooms!r}",
+        )
     if rooms is not None and not isinstance(rooms, str):
         rooms = _mapping(rooms, path + ("rooms",))
         for k, v in rooms.items():
@@ -852,9 +863,7 @@ def read_ontology_file(
     """Read and validate an ontology file (``seeds``: see :func:`parse_ontology`)."""
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError as exc:
-        raise InvalidOntologyError(p, "no such file") from exc
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InvalidOntologyError(p, f"cannot read the file ({exc})") from exc
+        text = read_text(p, "ontology file")
+    except ReadError as exc:
+        raise InvalidOntologyError(p, exc.problem) from None
     return parse_ontology(text, p, seeds=seeds)

@@ -332,8 +332,122 @@ def missing_factor(part: Part, desc: ClusterDescription) -> float:
     return part.missing
 
 
-def score_class(cls: ObjectClass, desc: ClusterDescription, log_prior: float = 0.0) -> ClassScore:
-    """Find the most likely assignment of planes to the class's parts and its likelihood."""
+def _combo_log(
+    combo: Sequence[int | None],
+    unary: np.ndarray,
+    missing: Sequence[float],
+    plane_log_extra: np.ndarray,
+    more: Sequence[frozenset[int]],
+    best_log: float,
+    rel_terms: Sequence[tuple[int, int, Any]],
+    desc: ClusterDescription,
+) -> float:
+    """Log-likelihood of one assignment (-inf when it cannot beat ``best_log``)."""
+    used = [c for c in combo if c is not None]
+    explained = set(used).union(*(more[c] for c in used))
+    total = float(plane_log_extra.sum()) - float(sum(plane_log_extra[c] for c in explained))
+    for p, c in enumerate(combo):
+        total += unary[p, c] if c is not None else math.log(missing[p])
+    if total <= best_log:
+        return -math.inf  # relation factors are <= 1: this cannot win
+    for a, b, rel in rel_terms:
+        ia, ib = combo[a], combo[b]
+        if ia is None or ib is None:
+            continue
+        for feature, g in rel.constraints.items():
+            total += float(g.log(_relation_feature(desc, ia, ib, feature)))
+    return total
+
+
+def _exhaustive_assignment(unary, missing, candidates, rel_terms, plane_log_extra, desc):
+    """Every combination of candidates, in ``itertools.product`` order; the first best wins.
+    Exponential in the number of parts: kept as the reference the tests compare with."""
+    more = desc.continued
+    best_log, best_assign = -math.inf, None
+    for combo in itertools.product(*candidates):
+        used = [c for c in combo if c is not None]
+        if len(used) != len(set(used)):
+            continue
+        total = _combo_log(combo, unary, missing, plane_log_extra, more, best_log, rel_terms, desc)
+        if total > best_log:
+            best_log, best_assign = total, combo
+    assert best_assign is not None  # the all-missing combination always exists
+    return best_log, best_assign
+
+
+#: Slack of the branch-and-bound pruning, far above rounding and far below any real gap.
+_BOUND_SLACK = 1e-9
+
+
+def _search_assignment(unary, missing, candidates, rel_terms, plane_log_extra, desc):
+    """Branch and bound over the parts, in the exhaustive search's order: the same best
+    assignment (ties: the first in ``itertools.product`` order), without visiting the
+    combinations that cannot beat the best found so far.
+
+    The bound of a partial assignment adds, for every part still open, the best that part
+    could add on its own: its best candidate's log-factor plus every plane that candidate
+    would explain (or its missing factor). Relations only lower a total (factors <= 1) and a
+    plane explained twice counts once, so the bound never falls below what a completion
+    reaches; a branch is cut only when its bound is below the best total found.
+    """
+    more = desc.continued
+    n = len(candidates)
+    gain = np.maximum(-plane_log_extra, 0.0)
+
+    def option_bound(p: int, c: int | None) -> float:
+        if c is None:
+            return math.log(missing[p])
+        return float(unary[p, c]) + float(sum(gain[k] for k in {c} | more[c]))
+
+    # best[p]: the most parts p.. can add, each on its own.
+    best_rest = [0.0] * (n + 1)
+    for p in range(n - 1, -1, -1):
+        best_rest[p] = best_rest[p + 1] + max(option_bound(p, c) for c in candidates[p])
+    base = float(plane_log_extra.sum())
+    state = {"log": -math.inf, "assign": None}
+    combo: list[int | None] = [None] * n
+
+    def visit(p: int, used: set[int], explained: set[int], partial: float) -> None:
+        if p == n:
+            total = _combo_log(
+                combo, unary, missing, plane_log_extra, more, state["log"], rel_terms, desc
+            )
+            if total > state["log"]:
+                state["log"], state["assign"] = total, tuple(combo)
+            return
+        for c in candidates[p]:
+            if c is not None and c in used:
+                continue
+            if c is None:
+                step, new_explained = math.log(missing[p]), explained
+            else:
+                new_explained = explained | {c} | more[c]
+                step = float(unary[p, c]) + float(sum(gain[k] for k in new_explained - explained))
+            bound = partial + step + best_rest[p + 1]
+            if bound + _BOUND_SLACK < state["log"]:
+                continue
+            combo[p] = c
+            visit(p + 1, used | {c} if c is not None else used, new_explained, partial + step)
+        combo[p] = None
+
+    visit(0, set(), set(), base)
+    assert state["assign"] is not None  # the all-missing combination always exists
+    return state["log"], state["assign"]
+
+
+def score_class(
+    cls: ObjectClass,
+    desc: ClusterDescription,
+    log_prior: float = 0.0,
+    *,
+    search_exhaustively: bool = False,
+) -> ClassScore:
+    """Find the most likely assignment of planes to the class's parts and its likelihood.
+
+    The search is a branch and bound (:func:`_search_assignment`) that finds the same
+    assignment as trying every combination (``search_exhaustively=True``, the reference
+    the tests compare with) without its exponential cost in the number of parts.
+    """
     unary = _unary(cls, desc)
     missing = [missing_factor(part, desc) for part in cls.parts]
     part_index = {p.name: k for k, p in enumerate(cls.parts)}
@@ -348,28 +462,9 @@ def score_class(cls: ObjectClass, desc: ClusterDescription, log_prior: float = 0
     # Planes no part explains cost ``extra_plane`` each, weighted by their size: a stool
     # is not a chair with a back, but a chair is still a chair with a caster in view.
     plane_log_extra = _extra_log(cls, desc.planes)
-    all_extra = float(plane_log_extra.sum())
     more = desc.continued
-    best_log, best_assign = -math.inf, None
-    for combo in itertools.product(*candidates):
-        used = [c for c in combo if c is not None]
-        if len(used) != len(set(used)):
-            continue
-        explained = set(used).union(*(more[c] for c in used))
-        total = all_extra - float(sum(plane_log_extra[c] for c in explained))
-        for p, c in enumerate(combo):
-            total += unary[p, c] if c is not None else math.log(missing[p])
-        if total <= best_log:
-            continue  # relation factors are <= 1: this cannot win
-        for a, b, rel in rel_terms:
-            ia, ib = combo[a], combo[b]
-            if ia is None or ib is None:
-                continue
-            for feature, g in rel.constraints.items():
-                total += float(g.log(_relation_feature(desc, ia, ib, feature)))
-        if total > best_log:
-            best_log, best_assign = total, combo
-    assert best_assign is not None  # the all-missing combination always exists
+    search = _exhaustive_assignment if search_exhaustively else _search_assignment
+    best_log, best_assign = search(unary, missing, candidates, rel_terms, plane_log_extra, desc)
 
     constraints: list[ConstraintValue] = []
     factors: dict[str, dict[str, float]] = {}

@@ -21,9 +21,11 @@ from numpy.typing import NDArray
 
 from .._parallel import cpu_count, fork_context
 from .._progress import progress, use_reporter
+from .._rules import SEED
 from ..cloud import DataWarning, PointCloud, as_position, pixel_grid, sensor_position
 from ..config import COUNT, Config, Nullable, check_param
 from ..errors import InvalidParameterError
+from ..io._budget import check_extent
 from ..labeling import LabelChoice, label_clusters
 from ..ontology import ClusterScores, Ontology, builtin_ontology, class_priors, score_cluster
 from ..preprocess import Ground, find_ground, smooth_depth
@@ -105,6 +107,9 @@ def detect(
     """
     if not isinstance(cloud, PointCloud):
         raise InvalidParameterError("cloud", "a PointCloud", type(cloud).__name__)
+    seed = check_param("seed", SEED, seed)
+    # A point kilometres away would stretch every grid and fit downstream: refused here.
+    check_extent(cloud.meta.get("source") or "<cloud>", cloud.xyz)
     config = config or Config()
     d = config.detect
     if viewpoint is not None:

@@ -59,6 +59,8 @@ __all__ = [
 
 #: Scale applied to clouds whose size says millimetres.
 MILLIMETRE = 1e-3
+#: Scale applied to clouds whose size says centimetres.
+CENTIMETRE = 1e-2
 #: Voxel centres sampled to estimate the sampling spacing.
 SPACING_SAMPLE = 20_000
 #: A rotation closer to the identity than this (Frobenius norm) is no rotation: the grid
@@ -107,14 +109,16 @@ def scale_from_travel(encoder_distance: float, slam_distance: float) -> float:
 
 
 def guess_scale(points: ArrayLike) -> float:
-    """1.0 for clouds in metres, 0.001 for clouds whose size says millimetres.
+    """1.0 for clouds in metres, 0.01 or 0.001 for clouds whose size says centimetres or
+    millimetres.
 
     Examples
     --------
     >>> guess_scale([[0, 0, 0], [5000.0, 4000.0, 2500.0]])
     0.001
     """
-    return MILLIMETRE if guess_units(np.asarray(points, dtype=np.float64)) == "millimetres" else 1.0
+    units = guess_units(np.asarray(points, dtype=np.float64))
+    return {"millimetres": MILLIMETRE, "centimetres": CENTIMETRE}.get(units, 1.0)
 
 
 @dataclass(frozen=True, eq=False)

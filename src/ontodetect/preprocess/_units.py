@@ -1,5 +1,5 @@
 """Guesses about a scan's units and sampling: the spacing of its points and whether it
-is in metres or millimetres. Preparation uses them to choose the scale factor k_s;
+is in metres, centimetres or millimetres. Preparation uses them to choose the scale factor k_s;
 ``ontodetect info`` (:mod:`ontodetect.summary`) shows them."""
 
 from __future__ import annotations
@@ -8,12 +8,27 @@ import numpy as np
 
 from ..errors import InvalidParameterError
 
-__all__ = ["MAX_METRIC_EXTENT", "SAMPLE_SIZE", "estimate_spacing", "guess_units"]
+__all__ = [
+    "EXTENT_PERCENTILE",
+    "MAX_CENTIMETRE_EXTENT",
+    "MAX_METRIC_EXTENT",
+    "SAMPLE_SIZE",
+    "estimate_spacing",
+    "guess_units",
+    "robust_extent",
+]
 
 #: Points sampled for spacing and up-axis estimates; enough for a stable median.
 SAMPLE_SIZE = 20_000
-#: A room-scale scene measured in metres is at most this wide (a building floor).
-MAX_METRIC_EXTENT = 500.0
+#: A room-scale scene measured in metres is at most this wide (a large hall; between the
+#: percentiles below). Beyond it, a room is read in centimetres (a 1.5 m booth is 150).
+MAX_METRIC_EXTENT = 120.0
+#: Beyond MAX_METRIC_EXTENT and up to this, a scene is in centimetres (1.2-25 m): in
+#: millimetres it would be a single object under 2.5 m, which is not a scene.
+MAX_CENTIMETRE_EXTENT = 2500.0
+#: The extent is measured between these percentiles of each axis, so that a few stray
+#: points (one reflection a kilometre away) do not change the guess.
+EXTENT_PERCENTILE = 0.5
 
 
 def _sample(xyz: np.ndarray, size: int, seed: int) -> np.ndarray:
@@ -68,21 +83,45 @@ def estimate_spacing(
     return float(np.median(d)) if d.size else 0.0
 
 
+def robust_extent(xyz: np.ndarray) -> float:
+    """The widest axis of the points, measured between the :data:`EXTENT_PERCENTILE` and
+    ``100 - EXTENT_PERCENTILE`` percentiles (finite points only; 0 for none).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> pts = np.r_[np.random.default_rng(0).uniform(0, 5, (1000, 3)), [[1000.0, 0, 0]]]
+    >>> robust_extent(pts) < 5
+    True
+    """
+    xyz = np.asarray(xyz, dtype=np.float64)
+    xyz = xyz[np.isfinite(xyz).all(axis=1)] if xyz.ndim == 2 else xyz.reshape(0, 3)
+    if len(xyz) < 2:
+        return 0.0
+    lo, hi = np.percentile(xyz, [EXTENT_PERCENTILE, 100.0 - EXTENT_PERCENTILE], axis=0)
+    return float(np.max(hi - lo))
+
+
 def guess_units(xyz: np.ndarray, spacing: float | None = None) -> str:
-    """ "metres" or "millimetres" (or "unknown"), from the size of the scene.
+    """ "metres", "centimetres" or "millimetres" (or "unknown"), from the size of the scene
+    (:func:`robust_extent`, so a few far points do not flip it).
 
     Examples
     --------
     >>> import numpy as np
     >>> guess_units(np.array([[0, 0, 0], [4000.0, 3000, 2500]]))
     'millimetres'
+    >>> guess_units(np.array([[0, 0, 0], [600.0, 400, 250]]))
+    'centimetres'
     """
     xyz = np.asarray(xyz, dtype=np.float64)
     if len(xyz) < 2:
         return "unknown"
-    extent = float(np.max(np.ptp(xyz, axis=0)))
-    if extent > MAX_METRIC_EXTENT:
+    extent = robust_extent(xyz)
+    if extent > MAX_CENTIMETRE_EXTENT:
         return "millimetres"
+    if extent > MAX_METRIC_EXTENT:
+        return "centimetres"
     if spacing is not None and spacing > 5.0:
         return "millimetres"
     return "metres"

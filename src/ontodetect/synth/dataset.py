@@ -685,6 +685,8 @@ def _load_json(path: Path) -> Any:
         raise ReadError(path, f"cannot be read ({exc})") from exc
     except json.JSONDecodeError as exc:
         raise CorruptFileError(path, f"is not valid JSON (line {exc.lineno}: {exc.msg})") from exc
+    except RecursionError:
+        raise CorruptFileError(path, "is not valid JSON (nested too deeply)") from None
 
 
 def load_synth(out_dir: str | Path) -> tuple[PointCloud, list[dict[str, Any]], dict[str, Any]]:

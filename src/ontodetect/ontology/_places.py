@@ -1,0 +1,24 @@
+"""The shipped Places205 tables (data/places205.yaml): categories, aliases, presets and
+the tables P(object | category) an ontology's ``prior: {rooms: NAME}`` may name."""
+
+from __future__ import annotations
+
+import functools
+from importlib import resources
+from typing import Any
+
+from ..io._yaml import load_yaml
+
+__all__ = ["places_data", "room_table_names"]
+
+
+@functools.cache
+def places_data() -> dict[str, Any]:
+    """The parsed places205.yaml (cached)."""
+    text = resources.files("ontodetect").joinpath("data/places205.yaml").read_text("utf-8")
+    return load_yaml(text)
+
+
+def room_table_names() -> list[str]:
+    """Names of the tables P(object | category), e.g. ``"seating"`` (Table 4.10)."""
+    return sorted(next(iter(places_data()["categories"].values())))
