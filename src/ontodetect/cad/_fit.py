@@ -38,10 +38,10 @@ from numpy.typing import ArrayLike, NDArray
 
 from .._progress import progress
 from ..cloud import PointCloud, point_cloud
-from ..errors import InvalidParameterError, WriteError
+from ..errors import InvalidParameterError
 from ..geometry import LevelFrame
 from ..geometry._mesh import Mesh
-from ..io import atomic_write_bytes, write_cloud
+from ..io import atomic_write_bytes, make_folder, write_cloud
 from ..ontology import Ontology, builtin_ontology
 from ..preprocess import rotation_between
 from ._icp import INLIER_DISTANCE, KERNELS, ground_icp, pose_matrix
@@ -1198,11 +1198,7 @@ def write_object_map(
     """
     import trimesh  # lazy: trimesh only to write the object map
 
-    out = Path(out_dir)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise WriteError(out, f"cannot create the folder ({exc.strerror})") from exc
+    out = make_folder(out_dir, "output folder")
     points_path = write_cloud(
         out / "object_map.ply", object_map_cloud(fits, spacing=spacing, seed=seed)
     )

@@ -34,8 +34,8 @@ from numpy.typing import NDArray
 from .._progress import progress
 from .._version import __version__
 from ..cloud import PointCloud
-from ..errors import CorruptFileError, InvalidParameterError, ReadError, WriteError
-from ..io import atomic_write, atomic_write_text, read_cloud, write_cloud
+from ..errors import CorruptFileError, InvalidParameterError, ReadError
+from ..io import atomic_write, atomic_write_text, make_folder, read_cloud, write_cloud
 from . import sensors as _sensors
 from .rooms import ROOM_TYPES, build_room
 from .scene import CLASS_IDS, OrientedBox, Scene, SceneObject
@@ -578,11 +578,7 @@ def write_synth(result: SynthResult, out_dir: str | Path, *, object_meshes: bool
         raise InvalidParameterError(
             "result", "a SynthResult from synthesize()", type(result).__name__
         )
-    out = Path(out_dir)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise WriteError(out, f"cannot create the folder ({exc.strerror})") from exc
+    out = make_folder(out_dir, "folder")
     sensor_out = result.output
     cloud = sensor_out.world_cloud()
     fields = {k: v for k, v in cloud.fields.items() if k in _PLY_FIELDS}
@@ -600,8 +596,7 @@ def write_synth(result: SynthResult, out_dir: str | Path, *, object_meshes: bool
     comment = f"ontodetect synth {result.room} seed {result.seed}"
     _write_mesh(out / "mesh.ply", result.scene.objects, comment)
     if object_meshes:
-        folder = out / "objects"
-        folder.mkdir(exist_ok=True)
+        folder = make_folder(out / "objects", "folder")
         for obj in result.scene.objects:
             _write_mesh(
                 folder / f"{obj.instance_id}.ply",
