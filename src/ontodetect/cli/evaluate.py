@@ -87,7 +87,7 @@ def eval_(
     proposals: str | None = typer.Option(
         None,
         "--proposals",
-        help="Object proposals: vote (default) or recognition (issue 20, opt-in; "
+        help="Object proposals: vote (default) or recognition (experimental, off by default; "
         "detect.proposals).",
     ),
     seed: int = typer.Option(0, "--seed", help="Seed of every random step."),
