@@ -14,7 +14,8 @@ setup:
 demo: setup
 	$(VENV)/bin/ontodetect demo -o $(OUT)
 
-test: setup
+test:
+	@bash scripts/bootstrap.sh --with-browser
 	$(VENV)/bin/ruff check src tests benchmarks scripts
 	$(VENV)/bin/ruff format --check src tests benchmarks scripts
 	$(PY) -m pytest -q -p no:cacheprovider

@@ -11,6 +11,18 @@ VENV=${VENV:-.venv}
 
 say() { printf '[setup] %s\n' "$*" >&2; }
 
+# Optional parts: --with-browser (the test suite's viewer test), --with-furniture (the
+# generalization benchmark). The demo needs neither.
+with_browser=0
+with_furniture=0
+for arg in "$@"; do
+    case "$arg" in
+        --with-browser) with_browser=1 ;;
+        --with-furniture) with_furniture=1 ;;
+        *) say "unknown option $arg (use --with-browser, --with-furniture)"; exit 2 ;;
+    esac
+done
+
 # 1. libusb-1.0: Open3D's Python module links against it even in the CPU build.
 if [ "$(uname -s)" = "Linux" ] && ! ldconfig -p 2>/dev/null | grep -q 'libusb-1\.0\.so\.0'; then
     if [ "$(id -u)" = "0" ] && command -v apt-get >/dev/null 2>&1; then
@@ -26,9 +38,10 @@ if [ "$(uname -s)" = "Linux" ] && ! ldconfig -p 2>/dev/null | grep -q 'libusb-1\
     fi
 fi
 
-# 1a. Chromium: the viewer's test (tests/test_viewer.py) opens view.html in headless Chromium.
-#     Only installed when missing and apt-get can; the test installs it the same way.
-if [ "$(uname -s)" = "Linux" ] && ! command -v chromium >/dev/null 2>&1 \
+# 1a. With --with-browser (make test): Chromium, in which the viewer's test
+#     (tests/test_viewer.py) opens view.html headless. Only installed when missing and
+#     apt-get can; the test installs it the same way.
+if [ "$with_browser" = 1 ] && [ "$(uname -s)" = "Linux" ] && ! command -v chromium >/dev/null 2>&1 \
         && [ "$(id -u)" = "0" ] && command -v apt-get >/dev/null 2>&1; then
     say "installing chromium with apt-get (the viewer's browser test)"
     export DEBIAN_FRONTEND=noninteractive
@@ -38,7 +51,7 @@ fi
 
 # 1b. With --with-furniture (the generalization benchmark): Debian's Sweet Home 3D furniture
 #     catalogues, which furnish its simulated rooms. Unit tests never need them.
-if [ "${1:-}" = "--with-furniture" ] && [ ! -d /usr/share/sweethome3d/furniture ] \
+if [ "$with_furniture" = 1 ] && [ ! -d /usr/share/sweethome3d/furniture ] \
         && [ -z "${ONTODETECT_SH3D_DIR:-}" ]; then
     if [ "$(id -u)" = "0" ] && command -v apt-get >/dev/null 2>&1; then
         say "installing sweethome3d-furniture with apt-get (the benchmark's furniture models)"
