@@ -6,8 +6,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial import cKDTree
 
+from ontodetect._units import estimate_spacing, nearest_other_sq
 from ontodetect.errors import InvalidParameterError
-from ontodetect.preprocess._units import estimate_spacing, nearest_other_sq
 
 
 def _tree_sq(points, rows):

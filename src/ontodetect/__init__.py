@@ -20,7 +20,6 @@ from __future__ import annotations
 
 from ._version import __version__
 from .cloud import DataWarning, PointCloud, point_cloud
-from .config import Config
 from .errors import (
     CorruptFileError,
     InvalidOntologyError,
@@ -62,4 +61,8 @@ def __getattr__(name: str):
         from . import pipeline  # lazy: import ontodetect without the stages (start-up)
 
         return getattr(pipeline, name)
+    if name == "Config":
+        from .config import Config  # lazy: `info` needs no configuration (start-up)
+
+        return Config
     raise AttributeError(f"module 'ontodetect' has no attribute {name!r}")

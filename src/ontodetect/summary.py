@@ -14,9 +14,9 @@ from typing import Any
 
 import numpy as np
 
+from ._units import SAMPLE_SIZE, _sample, estimate_spacing, guess_units
 from .cloud import PointCloud, pixel_grid, sensor_position
 from .errors import InvalidParameterError
-from .preprocess._units import SAMPLE_SIZE, _sample, estimate_spacing, guess_units
 
 __all__ = ["CloudSummary", "describe_cloud", "estimate_spacing", "guess_units", "guess_up_axis"]
 

@@ -7,12 +7,12 @@ from typing import TYPE_CHECKING, Any
 
 import yaml
 
-from ..config import Config
 from ..errors import InvalidParameterError, ReadError
 from ..io._textfile import read_text
 from ..io._yaml import describe_yaml_error, load_yaml
 
 if TYPE_CHECKING:
+    from ..config import Config
     from ..ontology import Ontology
 
 
@@ -32,6 +32,8 @@ def load_config(config: Path | None, overrides: list[str], **options: Any) -> Co
     """The configuration from ``--config`` (or the defaults) with ``--set`` overrides, then
     the options that set one key (:data:`CONFIG_OPTIONS`; None: not given), checked by the
     key's own rule."""
+    from ..config import Config  # lazy: CLI start-up (info needs no configuration)
+
     cfg = Config.from_yaml(config) if config is not None else Config()
     cfg = cfg.with_overrides(overrides) if overrides else cfg
     changes: dict[str, dict[str, Any]] = {}

@@ -21,6 +21,7 @@ passes of a vote over one scan share them (``prepare(..., ground=...)``).
 
 from __future__ import annotations
 
+from .._units import estimate_spacing, guess_units
 from ._denoise import denoise, far_outlier_mask, radius_outlier_mask, statistical_outlier_mask
 from ._depth import smooth_depth
 from ._floor import FloorMap, floor_height_map
@@ -48,7 +49,6 @@ from ._prepare import (
 )
 from ._structure import STRUCTURE_LABELS, StructurePlane, find_structure
 from ._surface import estimate_normals, graph_normals, smooth_surface
-from ._units import estimate_spacing, guess_units
 from ._voxel import VoxelGrid, grouped_covariance, voxelize
 
 __all__ = [

@@ -12,6 +12,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._progress import progress
+from .._units import estimate_spacing, guess_units
 from ..cloud import PointCloud, point_cloud
 from ..config import Config
 from ..errors import InvalidParameterError
@@ -30,7 +31,6 @@ from ._gravity import (
 )
 from ._structure import StructurePlane, find_structure
 from ._surface import smooth_surface
-from ._units import estimate_spacing, guess_units
 from ._voxel import VoxelGrid, voxelize
 
 __all__ = [

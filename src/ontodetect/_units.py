@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InvalidParameterError
+from .errors import InvalidParameterError
 
 __all__ = [
     "EXTENT_PERCENTILE",
@@ -174,7 +174,7 @@ def nearest_other_sq(xyz: np.ndarray, rows: np.ndarray) -> np.ndarray:
         todo = todo[best[todo] > cell * cell]
         if cell >= extent:
             break
-        cell *= 4.0
+        cell *= 2.0
     return best
 
 
