@@ -1,24 +1,9 @@
-"""Energy labelling: one label (or none) per cluster (thesis Eq. 3.6–3.8).
+"""Labelling: one label (or none) per cluster, and one consistent set of candidates.
 
-For cluster c and label l the unary energy is
-
-    U(c, l) = 1 − β / (1 + e^(−p)) − γ / (1 + e^(−f(c, l))),     β + γ = 1     (Eq. 3.7)
-
-with p the class probability P_obj|ont of l and f(c, l) the product over the
-cluster's planes of the label's colour and plane-size Gaussians (Eq. 3.8). As in
-Algorithm 1, only clusters whose best class probability reaches the decision
-threshold are labelled, and only with labels at or above it. Classes written under
-one label (a side table and a table) are kinds of one object: p, the threshold and
-the "none" test use the label's probability, the sum of theirs.
-
-Two pairwise terms make the labelling a small random field, solved exactly by
-enumeration per connected group of interacting clusters (greedy refinement only
-when a group is too large to enumerate):
-
-- exclusion: two clusters that share points (overlapping hypotheses from the
-  segmentation) cannot both be labelled;
-- context: a class near one its ontology lists under ``context`` is a little more
-  likely (a chair pulled up to a desk), an optional bonus ``-context · exp(-d² / 2 s²)``.
+- ``_energy``: the energy of thesis Eq. 3.6–3.8 (unary terms, exclusion and context),
+  minimised per group of interacting clusters (:func:`label_clusters`).
+- ``_select``: the non-overlapping candidates of largest summed weight
+  (:func:`select_candidates`), for segmentation by recognition.
 """
 
 from ._energy import (

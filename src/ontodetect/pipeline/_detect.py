@@ -26,13 +26,13 @@ from ..cloud import DataWarning, PointCloud, as_position, pixel_grid, sensor_pos
 from ..config import COUNT, Config, Nullable, check_param
 from ..errors import InvalidParameterError
 from ..io._budget import check_extent
-from ..labeling import LabelChoice, label_clusters
+from ..labeling import LabelChoice
 from ..ontology import ClusterScores, Ontology, builtin_ontology, class_priors, score_cluster
 from ..preprocess import Ground, find_ground, smooth_depth
 from ..segment import Segmentation, segment
 from ..segment._measure import describe_clusters
 from ._recognize import recognize
-from ._result import Detection, Result, _detection
+from ._result import Detection, Result, label_and_detect, numbered_result
 from ._vote import PassCluster, _vote, vote_turns
 
 __all__ = ["detect"]
@@ -152,11 +152,9 @@ def detect(
     if turned:
         found, choices = _vote(cloud, seg, scores, choices, found, others, ontology)
         timings["votes"] = time.perf_counter() - t0 - sum(timings.values())
-    found.sort(key=lambda d: (-d.score, d.cluster))
-    detections = [Detection(**{**d.__dict__, "id": i + 1}) for i, d in enumerate(found)]
-    return Result(
-        cloud=cloud,
-        detections=detections,
+    return numbered_result(
+        cloud,
+        found,
         segmentation=seg,
         scores=scores,
         choices=choices,
@@ -182,11 +180,9 @@ def _recognition_result(
         scan, config, ontology, priors, seed=seed, viewpoint=eye, ground=None
     )
     timings["segment"] += before
-    found.sort(key=lambda d: (-d.score, d.cluster))
-    detections = [Detection(**{**d.__dict__, "id": i + 1}) for i, d in enumerate(found)]
-    return Result(
-        cloud=cloud,
-        detections=detections,
+    return numbered_result(
+        cloud,
+        found,
         segmentation=seg,
         scores=scores,
         choices=choices,
@@ -249,22 +245,6 @@ def _one_pass(
     timings["score"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    centers = np.array([c.box.center for c in seg]) if len(seg) else np.zeros((0, 3))
-    choices = label_clusters(
-        scores,
-        [c.planes for c in seg],
-        ontology,
-        beta=d.beta,
-        threshold=d.threshold,
-        centers=centers,
-        context=d.context,
-    )
+    choices, detections = label_and_detect(cloud, seg, scores, ontology, d, found=found)
     timings["label"] = time.perf_counter() - t0
-    detections = [
-        _detection(
-            cloud, seg, k, scores[k], choice.label, choice.extra["class"], choice.costs, ontology
-        )
-        for k, choice in enumerate(choices)
-        if found and choice.label is not None
-    ]
     return seg, scores, choices, detections, timings

@@ -7,6 +7,7 @@ instead of the three-pass vote.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Mapping, Sequence
@@ -20,7 +21,6 @@ from ..config import Config
 from ..labeling import (
     LabelChoice,
     conflicts,
-    label_clusters,
     label_probabilities,
     select_candidates,
 )
@@ -28,7 +28,7 @@ from ..ontology import NONE, ClusterScores, Ontology, score_cluster
 from ..preprocess import Ground
 from ..segment import Cluster, Segmentation, clusters_of_voxels, propose, segment
 from ..segment._measure import describe_clusters
-from ._result import Detection, _detection
+from ._result import Detection, label_and_detect
 
 __all__ = ["Candidate", "candidate_gain", "recognize"]
 
@@ -172,44 +172,15 @@ def recognize(
     voxel_labels = np.full(len(prepared.voxels), -1, dtype=np.int64)
     for i, k in enumerate(keep):
         c = clusters[k]
-        picked.append(
-            Cluster(
-                i,
-                c.voxels,
-                c.point_indices,
-                c.centers,
-                c.box,
-                c.planes,
-                c.relations,
-                c.flags,
-                c.parts,
-                c.surface,
-            )
-        )
+        picked.append(dataclasses.replace(c, id=i))
         voxel_labels[c.voxels] = i
     seg = Segmentation(picked, prepared, voxel_labels, today.radius, "recognition", config)
     scores = [all_scores[k] for k in keep]
     timings["select"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    centers = np.array([c.box.center for c in seg]) if len(seg) else np.zeros((0, 3))
-    choices = label_clusters(
-        scores,
-        [c.planes for c in seg],
-        ontology,
-        beta=d.beta,
-        threshold=d.threshold,
-        centers=centers,
-        context=d.context,
-    )
+    choices, found = label_and_detect(cloud, seg, scores, ontology, d)
     timings["label"] = time.perf_counter() - t0
-    found = [
-        _detection(
-            cloud, seg, k, scores[k], choice.label, choice.extra["class"], choice.costs, ontology
-        )
-        for k, choice in enumerate(choices)
-        if choice.label is not None
-    ]
     return seg, scores, choices, found, timings, candidates
 
 

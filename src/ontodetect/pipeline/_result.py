@@ -20,7 +20,7 @@ from ..cad import cad_dict
 from ..cloud import PointCloud
 from ..errors import InvalidParameterError
 from ..io._detections import DETECTIONS_FORMAT
-from ..labeling import LabelChoice, label_probability
+from ..labeling import LabelChoice, label_clusters, label_probability
 from ..ontology import ClusterScores, Ontology
 from ..segment import Cluster, Segmentation
 
@@ -254,3 +254,46 @@ def _detection(
         cluster=k,
         votes=votes,
     )
+
+
+def label_and_detect(
+    cloud: PointCloud,
+    seg: Segmentation,
+    scores: Sequence[ClusterScores],
+    ontology: Ontology,
+    settings: Any,
+    *,
+    found: bool = True,
+) -> tuple[list[LabelChoice], list[Detection]]:
+    """One label per cluster by the energy (``settings``: ``config.detect``), and a
+    :class:`Detection` (numbered 0, in cluster order) per labelled cluster when ``found``."""
+    centers = np.array([c.box.center for c in seg]) if len(seg) else np.zeros((0, 3))
+    choices = label_clusters(
+        scores,
+        [c.planes for c in seg],
+        ontology,
+        beta=settings.beta,
+        threshold=settings.threshold,
+        centers=centers,
+        context=settings.context,
+    )
+    detections = [
+        _detection(
+            cloud, seg, k, scores[k], choice.label, choice.extra["class"], choice.costs, ontology
+        )
+        for k, choice in enumerate(choices)
+        if found and choice.label is not None
+    ]
+    return choices, detections
+
+
+def numbered_result(
+    cloud: PointCloud,
+    found: list[Detection],
+    **parts: Any,
+) -> Result:
+    """The :class:`Result` of ``found``, best score first, numbered from 1 (``parts``: the
+    other fields of :class:`Result`)."""
+    found = sorted(found, key=lambda d: (-d.score, d.cluster))
+    detections = [Detection(**{**d.__dict__, "id": i + 1}) for i, d in enumerate(found)]
+    return Result(cloud=cloud, detections=detections, **parts)

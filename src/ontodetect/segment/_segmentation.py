@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import zlib
 from collections.abc import Iterator, Sequence
@@ -501,21 +502,7 @@ def cluster(
             advance(1)
     if cc.drop_flagged:
         clusters = [c for c in clusters if not c.flagged]
-        clusters = [
-            Cluster(
-                i,
-                c.voxels,
-                c.point_indices,
-                c.centers,
-                c.box,
-                c.planes,
-                c.relations,
-                c.flags,
-                c.parts,
-                c.surface,
-            )
-            for i, c in enumerate(clusters)
-        ]
+        clusters = [dataclasses.replace(c, id=i) for i, c in enumerate(clusters)]
     for c in clusters:
         voxel_labels[c.voxels] = c.id
     return Segmentation(clusters, prepared, voxel_labels, radius, cc.method, config)
