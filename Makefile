@@ -39,7 +39,10 @@ generalization:
 
 # Refresh requirements.lock from pyproject.toml's ranges (the newest versions they admit, for
 # every platform and Python the package supports), then reinstall from it.
-lock: setup
+# It needs only a virtual environment (not the old lock installed: that fails once
+# pyproject.toml asks for something the old lock lacks).
+lock:
+	test -x $(PY) || python3 -m venv $(VENV)
 	$(PY) -m pip install -q "uv==$(UV_VERSION)"
 	printf 'setuptools>=77\nwheel\n' | $(VENV)/bin/uv pip compile pyproject.toml - \
 		--extra dev --universal --generate-hashes --python-version 3.10 \

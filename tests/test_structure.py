@@ -184,7 +184,19 @@ def test_our_modules_are_imported_inside_functions_only_with_a_reason():
     assert not unexplained, "\n".join(unexplained)
 
 
-HEAVY = ("open3d", "matplotlib", "trimesh", "laspy", "sklearn", "scipy.spatial", "scipy.sparse")
+HEAVY = (
+    "open3d",
+    "matplotlib",
+    "trimesh",
+    "laspy",
+    "sklearn",
+    "dask",
+    "distributed",
+    "PIL",
+    "pydantic",
+    "scipy.spatial",
+    "scipy.sparse",
+)
 STAGES = ("pipeline", "segment", "ontology", "labeling", "cad", "synth", "evaluation", "calibrate")
 
 
@@ -218,7 +230,11 @@ def test_info_on_a_small_ply_imports_no_heavy_library(tmp_path):
         "from ontodetect.cli import main\n"
         f"assert main(['--quiet', 'info', {str(path)!r}, '--json']) == 0"
     )
-    heavy = [m for m in ("open3d", "matplotlib", "trimesh", "laspy", "sklearn") if m in loaded]
+    heavy = [
+        m
+        for m in ("open3d", "matplotlib", "trimesh", "laspy", "sklearn", "dask", "pydantic")
+        if m in loaded
+    ]
     assert not heavy
     assert not [s for s in STAGES if f"ontodetect.{s}" in loaded]
 
