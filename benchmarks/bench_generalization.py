@@ -288,10 +288,7 @@ def build_simulated_set(
     digest = hashlib.sha256(json.dumps(key, sort_keys=True).encode()).hexdigest()[:12]
     folder = out / f"sim-{source.name}-{digest}"
     manifest = folder / "manifest.json"
-    sources = [
-        SceneSource(s.name, str(folder / s.name), "ontodetect", f"{s.room}-s{s.seed}")
-        for s in scans
-    ]
+    sources = _sources(folder, scans)
     if manifest.is_file() and json.loads(manifest.read_text()).get("key") == key:
         return folder, sources, True
     folder.mkdir(parents=True, exist_ok=True)
@@ -299,6 +296,26 @@ def build_simulated_set(
     summaries = map_scenes(generate_scan, units, jobs=jobs, description="Simulating rooms")
     manifest.write_text(json.dumps({"key": key, "scans": summaries}, indent=1) + "\n")
     return folder, sources, False
+
+
+def pinned_simulated_set(folder: Path, scans: Sequence[SimScan]) -> tuple[Path, list[SceneSource]]:
+    """A simulated set generated earlier (``--sim-set``), used even if the generator has
+    changed since, so that two versions of the detector are measured on the same rooms."""
+    manifest = folder / "manifest.json"
+    if not manifest.is_file():
+        raise InvalidParameterError("--sim-set", "a simulated set's folder (manifest.json)", folder)
+    have = set(json.loads(manifest.read_text()).get("key", {}).get("scans", []))
+    missing = [s.name for s in scans if s.name not in have]
+    if missing:
+        raise InvalidParameterError("--sim-set", "a set with every scan of this run", missing[:3])
+    return folder, _sources(folder, scans)
+
+
+def _sources(folder: Path, scans: Sequence[SimScan]) -> list[SceneSource]:
+    return [
+        SceneSource(s.name, str(folder / s.name), "ontodetect", f"{s.room}-s{s.seed}")
+        for s in scans
+    ]
 
 
 # -- figures -------------------------------------------------------------------------------
@@ -682,6 +699,13 @@ def main(argv: list[str] | None = None) -> int:
         help="simulated rooms: furnished (falls back to parametric when missing) or parametric",
     )
     ap.add_argument(
+        "--sim-set",
+        type=Path,
+        default=None,
+        help="a simulated set generated earlier (a sim-* folder of --out), used as it is even "
+        "if the generator changed: two versions measured on the same rooms",
+    )
+    ap.add_argument(
         "--only",
         default="real,sim,stability",
         help="which measurements to run, of real, sim and stability (default: all three; "
@@ -751,7 +775,11 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
             return _finish(out, doc, start)
         t0 = time.perf_counter()
         scans = simulated_set(source.room_types, quick=args.quick)
-        folder, sim_sources, reused = build_simulated_set(out, source, scans, jobs)
+        if args.sim_set is not None:
+            folder, sim_sources = pinned_simulated_set(args.sim_set, scans)
+            reused = True
+        else:
+            folder, sim_sources, reused = build_simulated_set(out, source, scans, jobs)
         t_gen = time.perf_counter() - t0
         t0 = time.perf_counter()
         if args.rooms:
