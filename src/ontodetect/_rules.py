@@ -8,6 +8,7 @@ instead." The configuration (:mod:`ontodetect.config`) re-exports every name her
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 from typing import Any
 
@@ -26,6 +27,7 @@ __all__ = [
     "WEIGHT",
     "Boolean",
     "Interval",
+    "Names",
     "Nullable",
     "OneOf",
     "Pair",
@@ -114,6 +116,30 @@ class OneOf(_Rule):
         if not isinstance(value, str) or value not in self.options:
             raise InvalidParameterError(name, self.describe(), value)
         return value
+
+
+@dataclass(frozen=True)
+class Names(_Rule):
+    """One of a few words, or a comma-separated list of names (checked where they are used).
+
+    Examples
+    --------
+    >>> Names(("reported", "all")).check("detect.classes", "toilet, sink")
+    'toilet,sink'
+    """
+
+    words: tuple[str, ...]
+
+    def describe(self) -> str:
+        return " or ".join(repr(w) for w in self.words) + " or a comma-separated list of names"
+
+    def check(self, name: str, value: Any) -> Any:
+        if not isinstance(value, str):
+            raise InvalidParameterError(name, self.describe(), value)
+        items = [v.strip() for v in value.split(",")]
+        if not all(items) or not all(re.fullmatch(r"[A-Za-z_][\w-]*", v) for v in items):
+            raise InvalidParameterError(name, self.describe(), value)
+        return ",".join(items)
 
 
 @dataclass(frozen=True)

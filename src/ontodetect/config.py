@@ -48,6 +48,7 @@ from ._rules import (
     SHARE,
     Boolean,
     Interval,
+    Names,
     Nullable,
     OneOf,
     Pair,
@@ -386,6 +387,14 @@ class DetectConfig(_Section):
         2_000_000,
         Interval(0, 10**12, "both", integer=True),
         "Clouds with more points than this get a single pass.",
+    )
+    # Which classes a detection may carry: those the ontology reports (detect: true), all of
+    # them (the competing classes too: toilets, sinks, beds...) or the ones named.
+    classes: str = _param(
+        "reported",
+        Names(("reported", "all")),
+        "Classes reported: 'reported' (the ontology's detect: true), 'all' (the competing "
+        "classes too) or a comma-separated list of class names.",
     )
     # Issue 20, opt-in: "recognition" makes many candidate objects from an over-segmentation,
     # scores every one and keeps the best non-overlapping set (no vote).

@@ -25,6 +25,7 @@ CONFIG_OPTIONS = {
     "context": "detect.context",
     "votes": "detect.votes",
     "proposals": "detect.proposals",
+    "classes": "detect.classes",
 }
 
 

@@ -83,6 +83,12 @@ def detect(
         help="Object proposals: vote (default) or recognition (experimental, off by default; "
         "detect.proposals).",
     ),
+    classes: str | None = typer.Option(
+        None,
+        "--classes",
+        help="Classes reported: 'all' adds the competing classes (toilet, sink, bed, "
+        "nightstand...), or a comma-separated list (detect.classes; default: chair, sofa, table).",
+    ),
     seed: int = typer.Option(0, "--seed", help="Seed of every random step."),
     explain_: str | None = typer.Option(
         None,
@@ -144,6 +150,7 @@ def detect(
         context=context,
         votes=votes,
         proposals=proposals,
+        classes=classes,
     )
     onto = load_ontology_option(ontology, ontology_only)
     room_arg = room_option(room, room_probs)

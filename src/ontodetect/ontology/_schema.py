@@ -17,8 +17,9 @@ The format is documented in ``docs/ontology.md``. In short::
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
@@ -26,7 +27,7 @@ from typing import Any
 
 import yaml
 
-from ..errors import InvalidOntologyError, ReadError
+from ..errors import InvalidOntologyError, InvalidParameterError, ReadError
 from ..io._textfile import read_text
 from ..io._yaml import SafeYamlLoader, YamlError, describe_yaml_error
 from ._features import CLUSTER_FEATURES, PART_FEATURES, RELATION_FEATURES
@@ -285,6 +286,45 @@ class Ontology:
             other.source or self.source,
             {**self.seeds, **other.seeds},
         )
+
+    def reporting(self, classes: str | Sequence[str] = "reported") -> Ontology:
+        """The ontology with the classes a detection may carry set to report (``detect``).
+
+        ``"reported"``: as written; ``"all"``: every class, the competing ones too; names
+        (a list or a comma-separated string): just those, by class name or label. Which
+        classes compete for a cluster does not change, only which win yields a detection.
+
+        Examples
+        --------
+        >>> from ontodetect.ontology import builtin_ontology
+        >>> onto = builtin_ontology().reporting("all")
+        >>> onto["toilet"].detect, builtin_ontology()["toilet"].detect
+        (True, False)
+        >>> [c.name for c in builtin_ontology().reporting("chair,sink").classes if c.detect]
+        ['chair', 'sink']
+        """
+        if isinstance(classes, str):
+            if classes == "reported":
+                return self
+            if classes == "all":
+                wanted = None
+            else:
+                wanted = {n.strip() for n in classes.split(",") if n.strip()}
+        else:
+            wanted = set(classes)
+        if wanted is not None:
+            known = {c.name for c in self.classes} | {c.label for c in self.classes}
+            unknown = sorted(wanted - known)
+            if unknown:
+                raise InvalidParameterError(
+                    "detect.classes", f"class names of the ontology ({', '.join(self.names)})",
+                    ",".join(unknown),
+                )  # fmt: skip
+        out = tuple(
+            dataclasses.replace(c, detect=wanted is None or c.name in wanted or c.label in wanted)
+            for c in self.classes
+        )
+        return Ontology(out, self.source, self.seeds)
 
     def seed_styles(self) -> list[tuple[SeedStyle, float]]:
         """Every seed style with the highest height its seed parts allow, lowest first.

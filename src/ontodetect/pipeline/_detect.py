@@ -123,7 +123,7 @@ def detect(
             DataWarning,
             stacklevel=2,
         )
-    ontology = ontology or builtin_ontology()
+    ontology = (ontology or builtin_ontology()).reporting(config.detect.classes)
     priors = class_priors(ontology, room, indoor)
     if d.proposals == "recognition":
         return _recognition_result(cloud, config, ontology, priors, seed, eye)
