@@ -410,7 +410,8 @@ def test_environment_prior_follows_eq_3_10():
     mixed = class_priors(o, {"office": 1, "corridor": 1})["chair"]
     assert mixed == pytest.approx((0.58 + 0.05) / 2)
     assert class_priors(o)["chair"] == 1.0
-    assert class_priors(o, "office")["table"] == 1.0  # no room table for tables: unknown
+    assert class_priors(o, "office")["table"] == pytest.approx(0.9)  # places205.yaml tables
+    assert class_priors(o, "bathroom")["toilet"] == pytest.approx(0.9)
     assert sum(room_distribution("office_scenes").values()) == pytest.approx(1.0)
     with pytest.raises(InvalidParameterError, match="'room'"):
         room_distribution("spaceship")

@@ -57,11 +57,14 @@ def load_ontology_option(files: list[Path], only: bool) -> Ontology:
 
 
 def room_option(room: str | None, room_probs: Path | None) -> str | dict[str, Any] | None:
-    """``--room NAME`` or ``--room-probs FILE`` (a YAML/JSON mapping category -> weight)."""
+    """``--room NAME`` or ``--room-probs FILE`` (a YAML/JSON mapping category -> weight);
+    ``auto`` (estimated from the scan) when neither is given, None for ``--room none``."""
     if room is not None and room_probs is not None:
         raise InvalidParameterError("--room-probs", "not combined with --room", str(room_probs))
     if room_probs is None:
-        return room
+        if room is None:
+            return "auto"
+        return None if room.strip().lower() == "none" else room
     text = read_text(room_probs, "room probability file")
     try:
         data = load_yaml(text)

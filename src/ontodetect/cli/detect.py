@@ -46,7 +46,8 @@ def detect(
     room: str | None = typer.Option(
         None,
         "--room",
-        help="Room category for the prior, e.g. office, living_room, conference (Places205).",
+        help="Room category for the prior, e.g. office, living_room, bathroom (Places205 and "
+        "bathroom, bedroom); auto (default): estimated from the scan; none: no prior.",
     ),
     room_probs: Path | None = typer.Option(
         None, "--room-probs", help="YAML/JSON mapping room category -> probability."

@@ -62,7 +62,10 @@ def eval_(
         False, "--ontology-only", help="Use only the --ontology files, not the built-ins."
     ),
     room: str | None = typer.Option(
-        None, "--room", help="Room category for the prior (Places205), the same for every scene."
+        None,
+        "--room",
+        help="Room category for the prior (Places205), the same for every scene; auto "
+        "(default): estimated from each scan; none: no prior.",
     ),
     room_probs: Path | None = typer.Option(
         None, "--room-probs", help="YAML/JSON mapping room category -> probability."

@@ -11,7 +11,14 @@ cluster's planes to the class's parts and returns P_obj|ont for every class and
 from __future__ import annotations
 
 from ._builtin import builtin_ontology, load_ontology
-from ._environment import class_priors, object_prior, room_categories, room_distribution
+from ._environment import (
+    class_priors,
+    object_prior,
+    relative_priors,
+    room_categories,
+    room_distribution,
+    rooms_from_objects,
+)
 from ._features import (
     CLUSTER_FEATURES,
     FEATURES,
@@ -50,6 +57,7 @@ from ._score import (
     plane_feature,
     score_class,
     score_cluster,
+    with_priors,
 )
 
 __all__ = [
@@ -87,9 +95,12 @@ __all__ = [
     "plane_feature",
     "read_ontology_file",
     "register_feature",
+    "relative_priors",
     "room_categories",
     "room_distribution",
+    "rooms_from_objects",
     "score_class",
     "score_cluster",
     "sigma_floor",
+    "with_priors",
 ]

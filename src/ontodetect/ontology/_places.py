@@ -14,9 +14,18 @@ __all__ = ["places_data", "room_table_names"]
 
 @functools.cache
 def places_data() -> dict[str, Any]:
-    """The parsed places205.yaml (cached)."""
+    """The parsed places205.yaml (cached), with every table of ``tables`` spread into the
+    categories: ``categories[N][table]`` is P(object | N) for ``seating`` and the others."""
     text = resources.files("ontodetect").joinpath("data/places205.yaml").read_text("utf-8")
-    return load_yaml(text)
+    data = load_yaml(text)
+    for name, table in data.get("tables", {}).items():
+        values = table.get("values", {})
+        unknown = set(values) - set(data["categories"])
+        if unknown:  # pragma: no cover - the shipped file is checked by the tests
+            raise ValueError(f"places205.yaml: table {name!r} names unknown {sorted(unknown)}")
+        for category, row in data["categories"].items():
+            row[name] = float(values.get(category, table["default"]))
+    return data
 
 
 def room_table_names() -> list[str]:

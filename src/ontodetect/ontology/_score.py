@@ -23,6 +23,7 @@ puts its mass on "none".
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import itertools
 import math
@@ -48,6 +49,7 @@ __all__ = [
     "plane_feature",
     "score_class",
     "score_cluster",
+    "with_priors",
 ]
 
 #: Parts consider at most this many candidate planes (best unary scores first).
@@ -558,23 +560,51 @@ def score_cluster(
     """
     priors = priors or {}
     scores = {}
-    logs = {}
     for cls in ontology.classes:
         prior = float(priors.get(cls.name, 1.0))
-        log_prior = math.log(prior) if prior > 0 else -math.inf
-        s = score_class(cls, desc, log_prior)
-        scores[cls.name] = s
-        logs[cls.name] = s.log_likelihood + log_prior
-    logs[NONE] = math.log(none_likelihood) + math.log(none_prior)
+        scores[cls.name] = score_class(cls, desc, math.log(prior) if prior > 0 else -math.inf)
+    return _posterior(scores, math.log(none_likelihood) + math.log(none_prior))
+
+
+def _posterior(scores: Mapping[str, ClassScore], none_log: float) -> ClusterScores:
+    """P_obj|ont over the classes and "none" from each class's likelihood and prior."""
+    logs = {k: s.log_likelihood + s.log_prior for k, s in scores.items()}
+    logs[NONE] = none_log
     top = max(logs.values())
     weights = {k: math.exp(v - top) if v > -math.inf else 0.0 for k, v in logs.items()}
     z = sum(weights.values())
     probs = {k: w / z for k, w in weights.items()}
-    scores = {
-        k: ClassScore(
-            s.name, s.log_likelihood, s.log_prior, s.assignment, s.factors, s.constraints, probs[k]
-        )
-        for k, s in scores.items()
-    }
+    out = {k: dataclasses.replace(s, probability=probs[k]) for k, s in scores.items()}
     best = max(probs, key=lambda k: (probs[k], k != NONE))
-    return ClusterScores(classes=scores, probabilities=probs, best=best)
+    return ClusterScores(classes=out, probabilities=probs, best=best)
+
+
+def with_priors(
+    scores: ClusterScores,
+    priors: Mapping[str, float],
+    *,
+    none_likelihood: float = 0.05,
+    none_prior: float = 1.0,
+) -> ClusterScores:
+    """The same cluster's scores under other environment priors (1 for classes not given):
+    the likelihoods are kept, only P_obj and the posterior change (Eq. 3.1).
+
+    Examples
+    --------
+    >>> s = ClassScore("chair", math.log(0.5), 0.0, {}, {}, (), 0.0)
+    >>> t = ClassScore("toilet", math.log(0.5), 0.0, {}, {}, (), 0.0)
+    >>> flat = _posterior({"chair": s, "toilet": t}, math.log(0.05))
+    >>> round(flat.probabilities["chair"], 3), round(flat.probabilities["toilet"], 3)
+    (0.476, 0.476)
+    >>> bath = with_priors(flat, {"chair": 0.1, "toilet": 1.9})
+    >>> round(bath.probabilities["chair"], 3), round(bath.probabilities["toilet"], 3)
+    (0.048, 0.905)
+    """
+    reprior = {}
+    for name, s in scores.classes.items():
+        prior = float(priors.get(name, 1.0))
+        reprior[name] = dataclasses.replace(
+            s, log_prior=math.log(prior) if prior > 0 else -math.inf
+        )
+    out = _posterior(reprior, math.log(none_likelihood) + math.log(none_prior))
+    return dataclasses.replace(out, extra=dict(scores.extra))

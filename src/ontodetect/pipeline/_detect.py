@@ -8,6 +8,7 @@ and the intermediate results.
 
 from __future__ import annotations
 
+import dataclasses
 import multiprocessing
 import threading
 import time
@@ -15,6 +16,7 @@ import warnings
 from collections.abc import Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -27,7 +29,17 @@ from ..config import COUNT, Config, Nullable, check_param
 from ..errors import InvalidParameterError
 from ..io._budget import check_extent
 from ..labeling import LabelChoice
-from ..ontology import ClusterScores, Ontology, builtin_ontology, class_priors, score_cluster
+from ..ontology import (
+    ClusterScores,
+    Ontology,
+    builtin_ontology,
+    class_priors,
+    relative_priors,
+    room_distribution,
+    rooms_from_objects,
+    score_cluster,
+    with_priors,
+)
 from ..preprocess import Ground, find_ground, smooth_depth
 from ..segment import Segmentation, segment
 from ..segment._measure import describe_clusters
@@ -36,6 +48,12 @@ from ._result import Detection, Result, label_and_detect, numbered_result
 from ._vote import PassCluster, _vote, vote_turns
 
 __all__ = ["detect"]
+
+
+#: One pass: its clusters, their scores and labels, its detections and its timings.
+_Pass = tuple[
+    Segmentation, list[ClusterScores], list[LabelChoice], list[Detection], dict[str, float]
+]
 
 
 @dataclass(frozen=True)
@@ -54,11 +72,12 @@ def detect(
     *,
     config: Config | None = None,
     ontology: Ontology | None = None,
-    room: str | Mapping[str, float] | None = None,
+    room: str | Mapping[str, float] | None = "auto",
     indoor: float | None = None,
     jobs: int | None = None,
     seed: int = 0,
     viewpoint: Sequence[float] | None = None,
+    scene_rooms: Mapping[str, float] | None = None,
 ) -> Result:
     """Find the objects an ontology describes in a point cloud.
 
@@ -75,8 +94,18 @@ def detect(
         ``Config().with_overrides(["detect.votes=1", "prepare.up=auto"])``.
     ontology : Ontology, optional
         Classes to look for; the built-in furniture ontology by default.
-    room : str or mapping, optional
-        Room category or distribution for the environment prior (Eq. 3.10).
+    room : str, mapping or None
+        The environment prior P_N (Eq. 3.10): a room category (``"office"``), a
+        distribution over categories, ``"auto"`` (the default) to estimate it from the
+        scan itself — a first labelling with every class competing says what the room
+        holds (:func:`ontodetect.ontology.rooms_from_objects`), and the labelling runs
+        again with the classes the room makes unlikely explained away
+        (:func:`ontodetect.ontology.relative_priors`) — or None for no prior.
+    scene_rooms : mapping, optional
+        P_N from photographs of the scene (:func:`ontodetect.environment.predict_environment`).
+        With ``room="auto"`` it is combined with the scan's estimate
+        (:func:`ontodetect.environment.combine_room_priors`); alone (``room=None``) it is
+        the P_N of Eq. 3.10.
     indoor : float, optional
         P(indoor) for the indoor/outdoor prior (Eq. 3.5).
     jobs : int, optional
@@ -124,7 +153,15 @@ def detect(
             stacklevel=2,
         )
     ontology = (ontology or builtin_ontology()).reporting(config.detect.classes)
-    priors = class_priors(ontology, room, indoor)
+    auto = isinstance(room, str) and room == "auto"
+    if auto and indoor is not None:  # P(indoor) given: Eq. 3.5 instead of an estimate
+        auto, room = False, None
+    if scene_rooms is not None and not auto:
+        if room is not None:
+            raise InvalidParameterError("scene_rooms", "not combined with a room given", room)
+        room = scene_rooms
+    priors = class_priors(ontology, None if auto else room, indoor)
+    environment = _environment_given(room, indoor, scene_rooms, auto)
     if d.proposals == "recognition":
         return _recognition_result(cloud, config, ontology, priors, seed, eye)
     passes = d.votes if len(cloud) <= d.vote_max_points else 1
@@ -140,13 +177,26 @@ def detect(
     scan = smooth_depth(cloud) if config.prepare.depth_smoothing else cloud
     shared = _PassInputs(ontology, priors, seed, eye, find_ground(scan, config) if turned else None)
     before = time.perf_counter() - t0
+    first = None
+    if auto:
+        # A first labelling, every class competing and no prior, says what the room holds:
+        # P_N from it (and from photographs, when given), then every pass with its priors.
+        first = _one_pass(scan, config, shared)
+        rooms = rooms_from_objects(_found_objects(first[2], first[1]), ontology)
+        if scene_rooms is not None:
+            from ..environment import combine_room_priors  # lazy: only with photographs
+
+            rooms = combine_room_priors(rooms, scene_rooms)
+        priors = relative_priors(ontology, rooms)
+        shared = dataclasses.replace(shared, priors=priors)
+        environment = {"source": "scan+images" if scene_rooms else "scan", "rooms": rooms}
     if workers:
         with ProcessPoolExecutor(max_workers=workers, mp_context=fork_context()) as pool:
             futures = [pool.submit(_pass_clusters, scan, c, shared) for c in turned]
-            seg, scores, choices, found, timings = _one_pass(scan, config, shared)
+            seg, scores, choices, found, timings = _one_pass(scan, config, shared, first=first)
             others = [f.result() for f in futures]
     else:
-        seg, scores, choices, found, timings = _one_pass(scan, config, shared)
+        seg, scores, choices, found, timings = _one_pass(scan, config, shared, first=first)
         others = [_pass_clusters(scan, c, shared) for c in turned]
     timings["segment"] += before
     if turned:
@@ -161,7 +211,38 @@ def detect(
         ontology=ontology,
         priors=priors,
         timings=timings,
+        environment=environment,
     )
+
+
+def _environment_given(
+    room: str | Mapping[str, float] | None,
+    indoor: float | None,
+    scene_rooms: Mapping[str, float] | None,
+    auto: bool,
+) -> dict[str, Any]:
+    """Where P_N comes from when the scan does not estimate it (``detections.json``)."""
+    if auto:
+        return {"source": "scan"}
+    if scene_rooms is not None:
+        return {"source": "images", "rooms": room_distribution(scene_rooms)}
+    if room is not None:
+        return {"source": "given", "rooms": room_distribution(room)}
+    if indoor is not None:
+        return {"source": "given", "indoor": indoor}
+    return {"source": "none"}
+
+
+def _found_objects(
+    choices: Sequence[LabelChoice], scores: Sequence[ClusterScores]
+) -> list[dict[str, float]]:
+    """What a labelling found, every class competing: each labelled cluster's
+    probabilities over the classes and "none"."""
+    return [
+        dict(score.probabilities)
+        for choice, score in zip(choices, scores)
+        if choice.extra.get("class") is not None
+    ]
 
 
 def _recognition_result(
@@ -225,24 +306,32 @@ def _one_pass(
     shared: _PassInputs,
     *,
     found: bool = True,
-) -> tuple[Segmentation, list[ClusterScores], list[LabelChoice], list[Detection], dict[str, float]]:
+    first: _Pass | None = None,
+) -> _Pass:
     """Segment, score and label once; detections (when ``found``) numbered 0, in cluster
-    order."""
+    order. With ``first`` (this pass made with other priors), its clusters and their
+    likelihoods are kept and only the priors change."""
     d, ontology = config.detect, shared.ontology
-    timings: dict[str, float] = {}
-    t0 = time.perf_counter()
-    seg = segment(cloud, config, seed=shared.seed, ground=shared.ground, ontology=ontology)
-    timings["segment"] = time.perf_counter() - t0
+    if first is not None:
+        seg, scores, _, _, timings = first
+        t0 = time.perf_counter()
+        scores = [with_priors(s, shared.priors, none_likelihood=d.none_likelihood) for s in scores]
+        timings = {**timings, "score": timings["score"] + time.perf_counter() - t0}
+    else:
+        timings = {}
+        t0 = time.perf_counter()
+        seg = segment(cloud, config, seed=shared.seed, ground=shared.ground, ontology=ontology)
+        timings["segment"] = time.perf_counter() - t0
 
-    t0 = time.perf_counter()
-    scores: list[ClusterScores] = []
-    with progress("Scoring clusters", total=len(seg)) as advance:
-        for desc in describe_clusters(seg, shared.viewpoint):
-            scores.append(
-                score_cluster(desc, ontology, shared.priors, none_likelihood=d.none_likelihood)
-            )
-            advance(1)
-    timings["score"] = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        scores = []
+        with progress("Scoring clusters", total=len(seg)) as advance:
+            for desc in describe_clusters(seg, shared.viewpoint):
+                scores.append(
+                    score_cluster(desc, ontology, shared.priors, none_likelihood=d.none_likelihood)
+                )
+                advance(1)
+        timings["score"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
     choices, detections = label_and_detect(cloud, seg, scores, ontology, d, found=found)

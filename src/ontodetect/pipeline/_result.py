@@ -121,6 +121,9 @@ class Result:
     candidates : list
         With ``detect.proposals: recognition``, every candidate object scored
         (``pipeline._recognize.Candidate``); empty with the vote.
+    environment : dict
+        Where the environment prior came from (``source``: ``scan``, ``images``,
+        ``scan+images``, ``given`` or ``none``) and the P_N used (``rooms``).
     """
 
     cloud: PointCloud
@@ -132,6 +135,7 @@ class Result:
     priors: dict[str, float]
     timings: dict[str, float] = field(default_factory=dict)
     candidates: list[Any] = field(default_factory=list)
+    environment: dict[str, Any] = field(default_factory=dict)
 
     @property
     def frame(self) -> dict[str, Any]:
@@ -151,6 +155,7 @@ class Result:
             "frame": self.frame,
             "detections": [d.to_dict() for d in self.detections],
             "priors": {k: round(v, 4) for k, v in self.priors.items()},
+            **({"environment": _environment_doc(self.environment)} if self.environment else {}),
             "timings": {k: round(v, 4) for k, v in self.timings.items()},
         }
 
@@ -170,6 +175,16 @@ class Result:
     @property
     def class_names(self) -> list[str]:
         return sorted({c.label for c in self.ontology.classes})
+
+
+def _environment_doc(environment: Mapping[str, Any]) -> dict[str, Any]:
+    """``detections.json``'s ``environment``: the source and P_N, most likely first."""
+    out = {k: v for k, v in environment.items() if k != "rooms"}
+    rooms = environment.get("rooms")
+    if rooms:
+        ranked = sorted(rooms.items(), key=lambda kv: (-kv[1], kv[0]))
+        out["rooms"] = {k: round(float(v), 4) for k, v in ranked}
+    return out
 
 
 def with_cad(result: Result, fits: Sequence[Any]) -> Result:
