@@ -53,6 +53,7 @@ __all__ = [
     "make_furniture",
     "part_boxes",
     "place",
+    "place_on",
 ]
 
 Seed = int | np.random.Generator | None
@@ -383,6 +384,46 @@ def place(obj: SceneObject, x: float, y: float, yaw: float = 0.0, z: float = 0.0
     return dataclasses.replace(
         obj, vertices=vertices, pose=T, box=box, extra=copy.deepcopy(obj.extra)
     )
+
+
+def place_on(
+    obj: SceneObject,
+    support: SceneObject,
+    at: tuple[float, float] = (0.5, 0.5),
+    yaw: float = 0.0,
+) -> SceneObject:
+    """A copy of ``obj`` standing on the top of ``support`` (a lamp on a nightstand).
+
+    Parameters
+    ----------
+    obj : SceneObject
+        The object to put down (its own placement is ignored).
+    support : SceneObject
+        An object with a top to put things on: ``extra`` has ``support_rect`` and
+        ``support_z`` (tables, desks, cabinets, nightstands, TV stands).
+    at : (2,) float
+        Where on the top, as fractions of ``support_rect`` in the support's frame:
+        (0.5, 0.5) is the middle, (0.5, 0.2) the middle near the back.
+    yaw : float
+        Turn (radians) relative to the support.
+
+    Examples
+    --------
+    >>> stand = place(make_furniture("nightstand", 0), 1.0, 0.3)
+    >>> lamp = place_on(make_furniture("lamp-table", 0), stand)
+    >>> bool(np.isclose(lamp.vertices[:, 2].min(), stand.vertices[:, 2].max()))
+    True
+    """
+    if "support_rect" not in support.extra or "support_z" not in support.extra:
+        raise InvalidParameterError(
+            "support", "an object with a top (support_rect and support_z)", support.kind
+        )
+    x0, y0, x1, y1 = support.extra["support_rect"]
+    u, v = (float(f) for f in at)
+    local = np.array([x0 + u * (x1 - x0), y0 + v * (y1 - y0), 0.0, 1.0])
+    wx, wy = (support.pose @ local)[:2]
+    z = float(support.extra["support_z"] + support.pose[2, 3])
+    return place(obj, float(wx), float(wy), support.yaw + yaw, z)
 
 
 def part_boxes(obj: SceneObject) -> list[OrientedBox]:
