@@ -27,7 +27,12 @@ carry in ``extra``:
   ``support_round`` for objects things can be put on (tables, desks, cabinets);
 - ``knee_center`` (object frame xy) for desks: where the chair goes;
 - ``front_span`` ([x0, x1, y], object frame) for sofas: the free front edge of the
-  seats, where a coffee table goes.
+  seats, where a coffee table goes;
+- ``bowl_center``, ``basin_center``, ``tub_center`` (object frame xy) for WCs,
+  washbasins and baths: the lowest point of the bowl's inside is straight below;
+- ``wall_mounted`` (True) for what hangs on a wall without touching the floor
+  (some WCs and washbasins); ``dimensions["floor_clearance"]`` is then its lowest
+  point's height.
 """
 
 from __future__ import annotations
@@ -234,7 +239,7 @@ class _Params:
 # Assembling parts into a SceneObject.
 
 #: Keys of ``extra`` holding object-frame xy points (moved when the object is re-centred).
-_FRAME_POINTS = ("seat_center", "knee_center")
+_FRAME_POINTS = ("seat_center", "knee_center", "bowl_center", "basin_center", "tub_center")
 
 
 class _Assembly:
