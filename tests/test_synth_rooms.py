@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 from collections import Counter
 
 import numpy as np
@@ -119,7 +120,9 @@ def test_furniture_inside_the_room_on_the_floor_or_on_a_support(room_type, scene
             lo, hi = aabb(obj)
             assert np.all(lo >= -1e-9) and hi[0] <= L + 1e-9 and hi[1] <= W + 1e-9, obj.kind
             assert hi[2] < H
-            if lo[2] > 1e-9:  # clutter: it rests on the top of something below it
+            if obj.extra.get("wall_mounted"):  # a WC or washbasin hung on a wall touches it
+                assert min(lo[0], lo[1], L - hi[0], W - hi[1]) < 2e-3, obj.kind
+            elif lo[2] > 1e-9:  # clutter: it rests on the top of something below it
                 tops = [o for o in objs if "support_z" in o.extra and o is not obj]
                 foot = np.array([[obj.box.center[0], obj.box.center[1], lo[2]]])
                 assert any(
@@ -220,6 +223,8 @@ MIN_MIX = {
     "bedroom": {"bed": 1, "closet": 1},
     "kitchen": {"table": 1, "chair": 2, "stool": 1, "cabinet": 1},
     "corridor": {"bench": 1},
+    "bathroom": {"toilet": 1, "sink": 1},
+    "hotel_room": {"bed": 1, "cabinet": 1, "lamp": 1, "tv_stand": 1, "chair": 1},
 }
 
 
@@ -317,3 +322,65 @@ def test_size_is_honoured():
 def test_bad_parameters_are_named(kwargs, match):
     with pytest.raises(InvalidParameterError, match=match):
         build_room(**kwargs)
+
+
+def fingerprint(scene):
+    """A digest of a scene's objects: classes, kinds, parts, meshes (to the micrometre), colours."""
+    h = hashlib.sha256()
+    h.update(repr((scene.room_type, np.round(scene.size, 6).tolist(), scene.seed)).encode())
+    for o in scene.objects:
+        h.update(repr((o.instance_id, o.class_name, o.kind, o.part_names)).encode())
+        h.update(np.round(o.vertices, 6).tobytes())
+        h.update(np.ascontiguousarray(o.triangles, dtype=np.int64).tobytes())
+        h.update(np.ascontiguousarray(o.triangle_part, dtype=np.int64).tobytes())
+        h.update(np.ascontiguousarray(o.triangle_color, dtype=np.uint8).tobytes())
+        h.update(np.round(o.pose, 6).tobytes())
+    return h.hexdigest()[:16]
+
+
+#: Fingerprints of the seed-0 rooms before the bathroom and hotel-room furniture came in:
+#: new kinds and room types must not change the rooms that were there.
+SEED0_FINGERPRINTS = {
+    "office": "f1c77e9b6e9bf58b",
+    "conference": "bb6a43b8cddbf64b",
+    "living_room": "fe22468b5cd35e81",
+    "home_office": "2b71b67dd4f8961c",
+    "dining_room": "bbb51825412bdbfd",
+    "bedroom": "a73cfa59a7f80a80",
+    "kitchen": "4980c52a03cea896",
+    "corridor": "30e60dc487ce41ad",
+    "tiny": "e1d308ccd18f2618",
+}
+
+
+@pytest.mark.parametrize("room_type", sorted(SEED0_FINGERPRINTS))
+def test_earlier_room_types_are_built_as_before(room_type, scenes):
+    assert fingerprint(scenes[room_type, 0]) == SEED0_FINGERPRINTS[room_type]
+
+
+def test_bathroom_sanitary_ware_stands_against_walls(scenes):
+    baths = 0
+    for seed in SEEDS:
+        scene = scenes["bathroom", seed]
+        L, W, _ = scene.size
+        for obj in furniture(scene):
+            if obj.class_name in ("toilet", "sink", "bathtub"):
+                lo, hi = aabb(obj)
+                assert min(lo[0], lo[1], L - hi[0], W - hi[1]) < 6e-3, obj.kind
+            baths += obj.class_name == "bathtub"
+    assert baths >= 1
+
+
+def test_hotel_room_lamps_stand_on_nightstands(scenes):
+    for seed in SEEDS:
+        objs = furniture(scenes["hotel_room", seed])
+        stands = [o for o in objs if o.kind == "nightstand"]
+        lamps = [o for o in objs if o.class_name == "lamp"]
+        assert lamps
+        for lamp in lamps:
+            base = np.array([[*lamp.pose[:2, 3], lamp.vertices[:, 2].min()]])
+            assert any(
+                s.box.contains(base, 1e-6)[0]
+                and lamp.vertices[:, 2].min() == pytest.approx(s.extra["support_z"])
+                for s in stands
+            )

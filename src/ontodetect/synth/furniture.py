@@ -27,7 +27,12 @@ carry in ``extra``:
   ``support_round`` for objects things can be put on (tables, desks, cabinets);
 - ``knee_center`` (object frame xy) for desks: where the chair goes;
 - ``front_span`` ([x0, x1, y], object frame) for sofas: the free front edge of the
-  seats, where a coffee table goes.
+  seats, where a coffee table goes;
+- ``bowl_center``, ``basin_center``, ``tub_center`` (object frame xy) for WCs,
+  washbasins and baths: the lowest point of the bowl's inside is straight below;
+- ``wall_mounted`` (True) for what hangs on a wall without touching the floor
+  (some WCs and washbasins); ``dimensions["floor_clearance"]`` is then its lowest
+  point's height.
 """
 
 from __future__ import annotations
@@ -53,6 +58,7 @@ __all__ = [
     "make_furniture",
     "part_boxes",
     "place",
+    "place_on",
 ]
 
 Seed = int | np.random.Generator | None
@@ -189,6 +195,16 @@ class _Params:
             )
         return value
 
+    def option(self, name: str, default: Any, options: Sequence[Any]) -> Any:
+        """A setting the caller may choose but that is not drawn: adding one to a builder
+        leaves every drawn value, and so every object built before, unchanged."""
+        value = self._take(name, default)
+        if value not in options:
+            raise InvalidParameterError(
+                name, f"one of {', '.join(map(repr, options))} for {self.kind!r}", value
+            )
+        return value
+
     def color(self, name: str, *palettes: dict[str, tuple[int, int, int]]) -> NDArray[np.uint8]:
         """A colour from the palettes, jittered; the override is a name or an (r, g, b) triple."""
         table = {k: v for pal in palettes for k, v in pal.items()}
@@ -223,7 +239,7 @@ class _Params:
 # Assembling parts into a SceneObject.
 
 #: Keys of ``extra`` holding object-frame xy points (moved when the object is re-centred).
-_FRAME_POINTS = ("seat_center", "knee_center")
+_FRAME_POINTS = ("seat_center", "knee_center", "bowl_center", "basin_center", "tub_center")
 
 
 class _Assembly:
@@ -373,6 +389,46 @@ def place(obj: SceneObject, x: float, y: float, yaw: float = 0.0, z: float = 0.0
     return dataclasses.replace(
         obj, vertices=vertices, pose=T, box=box, extra=copy.deepcopy(obj.extra)
     )
+
+
+def place_on(
+    obj: SceneObject,
+    support: SceneObject,
+    at: tuple[float, float] = (0.5, 0.5),
+    yaw: float = 0.0,
+) -> SceneObject:
+    """A copy of ``obj`` standing on the top of ``support`` (a lamp on a nightstand).
+
+    Parameters
+    ----------
+    obj : SceneObject
+        The object to put down (its own placement is ignored).
+    support : SceneObject
+        An object with a top to put things on: ``extra`` has ``support_rect`` and
+        ``support_z`` (tables, desks, cabinets, nightstands, TV stands).
+    at : (2,) float
+        Where on the top, as fractions of ``support_rect`` in the support's frame:
+        (0.5, 0.5) is the middle, (0.5, 0.2) the middle near the back.
+    yaw : float
+        Turn (radians) relative to the support.
+
+    Examples
+    --------
+    >>> stand = place(make_furniture("nightstand", 0), 1.0, 0.3)
+    >>> lamp = place_on(make_furniture("lamp-table", 0), stand)
+    >>> bool(np.isclose(lamp.vertices[:, 2].min(), stand.vertices[:, 2].max()))
+    True
+    """
+    if "support_rect" not in support.extra or "support_z" not in support.extra:
+        raise InvalidParameterError(
+            "support", "an object with a top (support_rect and support_z)", support.kind
+        )
+    x0, y0, x1, y1 = support.extra["support_rect"]
+    u, v = (float(f) for f in at)
+    local = np.array([x0 + u * (x1 - x0), y0 + v * (y1 - y0), 0.0, 1.0])
+    wx, wy = (support.pose @ local)[:2]
+    z = float(support.extra["support_z"] + support.pose[2, 3])
+    return place(obj, float(wx), float(wy), support.yaw + yaw, z)
 
 
 def part_boxes(obj: SceneObject) -> list[OrientedBox]:
@@ -775,8 +831,13 @@ def _chair_office(p: _Params) -> SceneObject:
     return asm.build("chair", p.kind, dims, {"seat_part": "seat", "seat_center": [0.0, seat_y]})
 
 
-def _chair_shell(p: _Params) -> SceneObject:
-    """Moulded plastic shell (seat and back in one curved piece) on four splayed legs."""
+def _chair_shell(p: _Params, curved: bool = False) -> SceneObject:
+    """Moulded plastic shell (seat and back in one curved piece) on four splayed legs.
+
+    The plain shell has a flat seat between a rolled front lip and the curve into the
+    back; ``curved=True`` makes a tub whose seat dips and flows into the back with no
+    flat plane anywhere.
+    """
     seat_h = p.uniform("seat_height", 0.43, 0.47)
     sw = p.uniform("seat_width", 0.44, 0.50)
     sd = p.uniform("seat_depth", 0.40, 0.46)
@@ -788,6 +849,10 @@ def _chair_shell(p: _Params) -> SceneObject:
     shell_color = p.color("shell_color", PLASTIC)
     leg_color = p.color("leg_color", WOOD, {"black": METAL["black"], "chrome": METAL["chrome"]})
     tilt = math.radians(recline - 90.0)
+    if p.option("curved", curved, (False, True)):
+        return _chair_tub(
+            p.kind, seat_h, sw, sd, t, back_len, recline, leg_r, splay, shell_color, leg_color
+        )
     asm = _Assembly()
 
     # Mid-surface profile in (y, z): a front lip rolling down, a flat seat, a curve up into
@@ -860,6 +925,108 @@ def _chair_shell(p: _Params) -> SceneObject:
     return asm.build(
         "chair", p.kind, dims, {"seat_part": "shell", "seat_center": [0.0, seat_center_y]}
     )
+
+
+def _dished_shell(
+    corners: ArrayLike,
+    width: float,
+    curl: float,
+    thickness: float,
+    fillet: float,
+    rows: int = 32,
+    cols: int = 15,
+) -> tuple[M.Mesh, NDArray[np.float64]]:
+    """A curved sheet along a rounded (k, 3) polyline of (0, y, z) corners, ``width`` wide,
+    dished across: its sides rise ``curl`` metres towards the sitter (quadratically, so no
+    row is flat). Returns the solid and its (cols, rows, 3) mid-surface grid."""
+    profile = M.fillet_path(corners, fillet, samples=10)
+    prof = _resample(profile[:, 1:], rows)
+    tangent = np.gradient(prof, axis=0)
+    tangent /= np.linalg.norm(tangent, axis=1, keepdims=True)
+    toward_sitter = np.column_stack([tangent[:, 1], -tangent[:, 0]])
+    s = np.linspace(-1.0, 1.0, cols)
+    lift = curl * s**2
+    grid = np.empty((cols, rows, 3))
+    grid[..., 0] = s[:, None] * width / 2
+    grid[..., 1] = prof[None, :, 0] + lift[:, None] * toward_sitter[None, :, 0]
+    grid[..., 2] = prof[None, :, 1] + lift[:, None] * toward_sitter[None, :, 1]
+    return M.thick_surface(grid, thickness), grid
+
+
+def _lowest_seat_point(
+    mesh: M.Mesh, grid: NDArray[np.float64], seat_rows: NDArray[np.bool_]
+) -> NDArray[np.float64]:
+    """The lowest point of a dished shell's upper face along its middle, among the seat rows.
+
+    ``thick_surface`` keeps its two faces' vertices in grid order, so the vertex over
+    grid point (i, j) is i * rows + j on one face and that plus the grid size on the other.
+    """
+    cols, rows = grid.shape[:2]
+    n = cols * rows
+    idx = (cols // 2) * rows + np.nonzero(seat_rows)[0]
+    v = mesh.vertices
+    upper = np.where(v[idx, 2] >= v[idx + n, 2], idx, idx + n)
+    return v[upper[np.argmin(v[upper, 2])]]
+
+
+def _chair_tub(
+    kind: str,
+    seat_h: float,
+    sw: float,
+    sd: float,
+    t: float,
+    back_len: float,
+    recline: float,
+    leg_r: float,
+    splay: float,
+    shell_color: NDArray[np.uint8],
+    leg_color: NDArray[np.uint8],
+) -> SceneObject:
+    """The curved shell chair: seat and back one continuous dished surface on four legs."""
+    tilt = math.radians(recline - 90.0)
+    corner = np.array([0.0, -sd / 2, 0.0])
+    top = corner + back_len * np.array([0.0, -math.sin(tilt), math.cos(tilt)])
+    # The seat dips about 2.5 cm below its front edge and the start of the back.
+    corners = [
+        (0.0, sd / 2 + 0.015, -0.02),
+        (0.0, sd / 2 - 0.03, 0.012),
+        (0.0, -0.04, -0.013),
+        corner,
+        top,
+    ]
+    shell, grid = _dished_shell(corners, sw, 0.05, t, 0.14)
+    seat_rows = grid[grid.shape[0] // 2, :, 2] < 0.04
+    low = _lowest_seat_point(shell, grid, seat_rows)
+    lift = np.array([0.0, 0.0, seat_h - low[2]])
+    shell = shell.translated(lift)
+    grid = grid + lift
+    asm = _Assembly()
+    asm.add("shell", shell, shell_color, boxes=_split_boxes(shell, seat_h + 0.05))
+    mid = grid.reshape(-1, 3)
+    ax, ay = sw / 2 - 0.08, sd / 2 - 0.09
+    for sx in (-1, 1):
+        for sy in (-1, 1):
+            # Each leg ends on the shell's mid-surface, buried in the shell.
+            top_pt = mid[np.argmin(np.hypot(mid[:, 0] - sx * ax, mid[:, 1] - sy * ay))]
+            foot = np.array([sx * (ax + splay), sy * (ay + splay), 0.0])
+            d = (top_pt - foot) / np.linalg.norm(top_pt - foot)
+            foot[2] = leg_r * math.sqrt(1 - d[2] ** 2)
+            asm.add(
+                "leg",
+                _on_floor(M.cylinder_between(foot, top_pt, leg_r, 12)),
+                leg_color,
+                group="legs",
+            )
+    dims = {
+        "seat_height": seat_h,
+        "seat_width": sw,
+        "seat_depth": sd,
+        "seat_thickness": t,
+        "recline": recline,
+        "backrest_height": _part_top(asm, "shell"),
+    }
+    extra = {"seat_part": "shell", "seat_center": [float(low[0]), float(low[1])]}
+    return asm.build("chair", kind, dims, extra)
 
 
 def _chair_sled(p: _Params) -> SceneObject:
@@ -1040,6 +1207,15 @@ def _sofa_straight(p: _Params, n_seats: int, arms: bool, class_name: str = "sofa
     armchair = class_name == "chair"
     q = _sofa_base(p, armchair=armchair)
     asm = _Assembly()
+    dims, extra = _upholstered(asm, q, n_seats, arms)
+    return asm.build(class_name, p.kind, dims, extra)
+
+
+def _upholstered(
+    asm: _Assembly, q: dict[str, Any], n_seats: int, arms: bool
+) -> tuple[dict[str, float], dict[str, Any]]:
+    """A straight sofa or an armchair from its drawn parameters ``q`` (see :func:`_sofa_base`);
+    returns its dimensions and ``extra``."""
     aw = q["arm_w"] if arms else 0.0
     inner = n_seats * q["per_seat"]
     W, D, z0 = inner + 2 * aw, q["depth"], q["z0"]
@@ -1105,12 +1281,11 @@ def _sofa_straight(p: _Params, n_seats: int, arms: bool, class_name: str = "sofa
     dims["backrest_height"] = max(_part_top(asm, "backrest"), _part_top(asm, "back_cushion"))
     first = -inner / 2 + q["per_seat"] / 2
     seat_center = [first, (-D / 2 + bt + q["back_cushion_t"] + D / 2) / 2]
-    return asm.build(
-        class_name,
-        p.kind,
-        dims,
-        {"seat_part": "cushion", "seat_center": seat_center, "front_span": [-W / 2, W / 2, D / 2]},
-    )
+    return dims, {
+        "seat_part": "cushion",
+        "seat_center": seat_center,
+        "front_span": [-W / 2, W / 2, D / 2],
+    }
 
 
 def _sofa_l(p: _Params) -> SceneObject:
@@ -1252,6 +1427,158 @@ def _sofa_l(p: _Params) -> SceneObject:
         "front_span": front_span,
     }
     return asm.build("sofa", p.kind, dims, extra)
+
+
+# --------------------------------------------------------------------------------------
+# Easy chairs: club armchairs, wingbacks, lounge chairs.
+#
+# Catalogue ranges of upholstered easy chairs (EN 12520 sets their strength and safety
+# requirements, EN 1022 their stability test): club chairs 80-100 cm wide, 80-95 cm
+# deep and 70-85 cm high, the seat cushion 37-45 cm above the floor, arms 55-65 cm high
+# and 15-25 cm wide, the middle of the backrest 47-60 cm up; upholstered down to the
+# floor or on feet up to 12 cm. Wingbacks have a backrest 100-120 cm high with wings
+# beside the head. Lounge chairs are a shell on a pedestal, the seat 38-42 cm high and
+# the back reclined 20-30 degrees from the vertical.
+
+CLUB_WIDTH = (0.80, 1.00)
+CLUB_DEPTH = (0.80, 0.95)
+CLUB_HEIGHT = (0.70, 0.85)
+CLUB_SEAT_HEIGHT = (0.37, 0.45)
+CLUB_ARM_HEIGHT = (0.55, 0.65)
+CLUB_ARM_WIDTH = (0.15, 0.25)
+CLUB_BACK_CENTER = (0.47, 0.60)
+CLUB_FOOT_HEIGHT = (0.03, 0.12)
+WINGBACK_HEIGHT = (1.00, 1.20)
+WINGBACK_WIDTH = (0.75, 0.90)
+WINGBACK_SEAT_HEIGHT = (0.40, 0.46)
+WINGBACK_ARM_WIDTH = (0.10, 0.16)
+LOUNGE_SEAT_HEIGHT = (0.38, 0.42)
+LOUNGE_BACK_TILT = (20.0, 30.0)
+#: Least height of the arms above the seat cushion (a forearm rests on them).
+_EASY_ARM_ABOVE_SEAT = 0.12
+
+
+def _easy_chair(p: _Params, wingback: bool) -> SceneObject:
+    """A club armchair, or a wingback (tall back with wings, on legs), built like a sofa."""
+    seat_h = p.uniform("seat_height", *(WINGBACK_SEAT_HEIGHT if wingback else CLUB_SEAT_HEIGHT))
+    width = p.uniform("width", *(WINGBACK_WIDTH if wingback else CLUB_WIDTH))
+    depth = p.uniform("depth", *CLUB_DEPTH)
+    height = p.uniform("height", *(WINGBACK_HEIGHT if wingback else CLUB_HEIGHT))
+    arm_h = p.uniform("armrest_height", *CLUB_ARM_HEIGHT)
+    arm_w = p.uniform("arm_width", *(WINGBACK_ARM_WIDTH if wingback else CLUB_ARM_WIDTH))
+    q: dict[str, Any] = {
+        "cushion_t": p.uniform("cushion_thickness", 0.10, 0.16),
+        "back_t": p.uniform("back_thickness", 0.15, 0.22),
+        "back_cushion_t": p.uniform("back_cushion_thickness", 0.10, 0.16),
+        "recline": p.uniform("recline", 100.0, 110.0),
+        "feet": p.choice("feet", ("feet", "plinth"), (5, 1) if wingback else (1, 1)),
+        "foot_h": p.uniform("foot_height", *CLUB_FOOT_HEIGHT),
+        "fabric": p.color("fabric_color", FABRIC),
+        "foot_color": p.color(
+            "foot_color", WOOD, {"black": METAL["black"], "chrome": METAL["chrome"]}
+        ),
+    }
+    wing_depth = p.uniform("wing_depth", 0.20, 0.30)
+    wing_t = p.uniform("wing_thickness", 0.06, 0.10)
+    if not wingback:
+        # The middle of the backrest stays in its range: a low seat goes with a taller back.
+        height = min(height, 2 * CLUB_BACK_CENTER[1] - seat_h)
+    # At least 50 cm between the arms; the arms clear the seat cushion.
+    arm_w = min(arm_w, (width - 0.50) / 2)
+    arm_h = max(arm_h, seat_h + _EASY_ARM_ABOVE_SEAT)
+    q.update(
+        seat_h=seat_h,
+        depth=depth,
+        height=height,
+        per_seat=width - 2 * arm_w,
+        arm_w=arm_w,
+        arm_above=arm_h - seat_h,
+        z0=q["foot_h"] if q["feet"] == "feet" else 0.03,
+    )
+    asm = _Assembly()
+    dims, extra = _upholstered(asm, q, 1, True)
+    if wingback:
+        # Wings: upholstered side panels from the arms to near the top of the back.
+        z0, z1 = arm_h - 0.01, height - 0.03
+        y0 = -depth / 2 + q["back_t"] - 0.02
+        for sx in (-1, 1):
+            asm.add(
+                "wing",
+                M.cushion(
+                    (wing_t, wing_depth, z1 - z0),
+                    0.2,
+                    center=(sx * (width / 2 - wing_t / 2), y0 + wing_depth / 2, (z0 + z1) / 2),
+                ),
+                q["fabric"],
+                group=f"wing{sx}",
+            )
+        dims["wing_depth"] = wing_depth
+    dims["backrest_center"] = (seat_h + height) / 2
+    dims["backrest_height"] = max(dims["backrest_height"], height)
+    return asm.build("chair", p.kind, dims, extra)
+
+
+def _chair_lounge(p: _Params) -> SceneObject:
+    """A lounge chair: one dished shell, seat tilted back and back reclined, on a pedestal."""
+    seat_h = p.uniform("seat_height", *LOUNGE_SEAT_HEIGHT)
+    sw = p.uniform("seat_width", 0.55, 0.68)
+    sd = p.uniform("seat_depth", 0.48, 0.56)
+    back_len = p.uniform("backrest_length", 0.55, 0.72)
+    back_tilt = p.uniform("back_tilt", *LOUNGE_BACK_TILT)
+    seat_tilt = p.uniform("seat_tilt", 4.0, 10.0)
+    t = p.uniform("shell_thickness", 0.02, 0.035)
+    base = p.choice("base", ("star", "disc"))
+    shell_color = p.color("shell_color", FABRIC, WOOD, PLASTIC)
+    base_color = p.color("base_color", METAL)
+    tilt_b, tilt_s = math.radians(back_tilt), math.radians(seat_tilt)
+    corner = np.array([0.0, -sd / 2, 0.0])
+    front = corner + sd * np.array([0.0, math.cos(tilt_s), math.sin(tilt_s)])
+    top = corner + back_len * np.array([0.0, -math.sin(tilt_b), math.cos(tilt_b)])
+    corners = [front + (0.0, 0.02, -0.04), front, corner + (0.0, sd / 2, -0.01), corner, top]
+    shell, grid = _dished_shell(corners, sw, 0.06, t, 0.16)
+    seat_rows = grid[grid.shape[0] // 2, :, 2] < front[2] + 0.02
+    low = _lowest_seat_point(shell, grid, seat_rows)
+    lift = np.array([0.0, 0.0, seat_h - low[2]])
+    shell = shell.translated(lift)
+    grid = grid + lift
+    asm = _Assembly()
+    asm.add("shell", shell, shell_color, boxes=_split_boxes(shell, seat_h + 0.08))
+    # A column from the base into the shell under the middle of the seat.
+    mid = grid.reshape(-1, 3)
+    col_top = mid[np.argmin(np.hypot(mid[:, 0], mid[:, 1] - low[1]))]
+    base_h = 0.04
+    if base == "disc":
+        asm.add(
+            "base",
+            M.lathe([(0, 0), (0.26, 0), (0.26, 0.012), (0.05, base_h), (0, base_h)], 32).translated(
+                (0.0, low[1], 0.0)
+            ),
+            base_color,
+            group="base",
+        )
+    else:
+        for k in range(4):
+            foot = M.box_between((0.0, -0.025, 0.0), (0.34, 0.025, base_h)).rotated(
+                "z", np.pi / 4 + k * np.pi / 2
+            )
+            asm.add("base", foot.translated((0.0, low[1], 0.0)), base_color, group="base")
+    asm.add(
+        "column",
+        M.cylinder(0.03, col_top[2] - base_h + 0.002, 16, center=(0.0, col_top[1], base_h - 0.002)),
+        base_color,
+        group="base",
+    )
+    dims = {
+        "seat_height": seat_h,
+        "seat_width": sw,
+        "seat_depth": sd,
+        "seat_thickness": t,
+        "back_tilt": back_tilt,
+        "recline": 90.0 + back_tilt - seat_tilt,
+        "backrest_height": _part_top(asm, "shell"),
+    }
+    extra = {"seat_part": "shell", "seat_center": [float(low[0]), float(low[1])]}
+    return asm.build("chair", p.kind, dims, extra)
 
 
 # --------------------------------------------------------------------------------------
@@ -2456,6 +2783,552 @@ def _radiator(p: _Params) -> SceneObject:
 
 
 # --------------------------------------------------------------------------------------
+# Sanitary ware: WCs, washbasins, baths.
+#
+# EN 33 fixes the connecting dimensions of floor-standing and wall-hung WC pans; within
+# them catalogue pans put the seat 38-43 cm above the floor (wall-hung ones, hung at the
+# user's height, 40-43 cm) and have bowls 34-40 cm wide; a close-coupled suite reaches
+# 60-70 cm from the wall with its cistern (34-42 cm wide, 15-20 cm deep, its lid 75-85 cm
+# up), a wall-hung pan 48-58 cm from the wall or the boxing of its cistern. Washbasins
+# (EN 31 pedestal and EN 32 wall-hung connecting dimensions, EN 14688 requirements):
+# 50-65 cm wide, 40-50 cm deep, the rim 80-90 cm high (85 cm usual), the bowl 12-18 cm
+# deep; vanity units 60-120 cm wide and 45-55 cm deep, backsplashes 10-30 cm high. Baths
+# (EN 232 connecting dimensions, EN 198 acrylic baths): 160-180 x 70-80 cm, the rim
+# 50-60 cm high, 38-45 cm deep inside with the inner bottom at least 10 cm above the
+# floor for the waste.
+
+WC_SEAT_HEIGHT = (0.38, 0.43)
+WALL_WC_SEAT_HEIGHT = (0.40, 0.43)
+WC_BOWL_WIDTH = (0.34, 0.40)
+WC_PROJECTION = (0.60, 0.70)
+WALL_WC_PROJECTION = (0.48, 0.58)
+CISTERN_WIDTH = (0.34, 0.42)
+CISTERN_DEPTH = (0.15, 0.20)
+CISTERN_HEIGHT = (0.75, 0.85)
+#: Top of the boxing of a wall-hung WC's cistern (or of its flush plate when concealed).
+WALL_CISTERN_HEIGHT = (0.95, 1.20)
+BASIN_WIDTH = (0.50, 0.65)
+BASIN_DEPTH = (0.40, 0.50)
+BASIN_RIM_HEIGHT = (0.80, 0.90)
+BASIN_BOWL_DEPTH = (0.12, 0.18)
+VANITY_WIDTH = (0.60, 1.20)
+VANITY_DEPTH = (0.45, 0.55)
+BACKSPLASH_HEIGHT = (0.10, 0.30)
+BATH_LENGTH = (1.60, 1.80)
+BATH_WIDTH = (0.70, 0.80)
+BATH_RIM_HEIGHT = (0.50, 0.60)
+BATH_INNER_DEPTH = (0.38, 0.45)
+BATH_INNER_BOTTOM = 0.10
+
+SANITARY = {"white": CERAMIC["white"], "ivory": (232, 226, 208), "manhattan": (206, 206, 202)}
+TAP = {"chrome": METAL["chrome"], "black": METAL["black"], "brass": METAL["brass"]}
+
+
+def _superellipse(phi: NDArray[np.float64] | float, n: float) -> NDArray[np.float64]:
+    """Radius of the unit superellipse |x|^n + |y|^n = 1 towards angle phi (n = 2: a circle)."""
+    c, s = np.abs(np.cos(phi)), np.abs(np.sin(phi))
+    return np.asarray((c**n + s**n) ** (-1.0 / n))
+
+
+def _oval(
+    profile: ArrayLike,
+    a: float,
+    b: float,
+    *,
+    center: tuple[float, float] = (0.0, 0.0),
+    squareness: float = 2.0,
+    closed: bool = False,
+    segments: int = 32,
+) -> M.Mesh:
+    """A solid of revolution (a ``lathe`` profile of (radius, z), radius 1 on the outline)
+    stretched to an oval of semi-axes ``a`` (x) and ``b`` (y) about ``center``;
+    ``squareness`` above 2 squares the outline off towards a rectangle with round
+    corners (a superellipse). Bowls, basins, seat rings, lids."""
+    m = M.lathe(profile, segments, closed=closed)
+    v = m.vertices.copy()
+    if squareness != 2.0:
+        v[:, :2] *= _superellipse(np.arctan2(v[:, 1], v[:, 0]), squareness)[:, None]
+    v[:, 0] = v[:, 0] * a + center[0]
+    v[:, 1] = v[:, 1] * b + center[1]
+    return M.Mesh(v, m.triangles)
+
+
+def _slab_with_hole(
+    rect: tuple[float, float, float, float],
+    z0: float,
+    z1: float,
+    a: float,
+    b: float,
+    center: tuple[float, float],
+    squareness: float = 2.0,
+    segments: int = 32,
+) -> list[M.Mesh]:
+    """A slab over ``rect`` (x0, y0, x1, y1) from z0 to z1 with an oval hole (semi-axes a, b
+    about ``center``, outlined as :func:`_oval`): one solid wedge from the hole to the edge
+    per step round the hole (a worktop with its basin cut-out, a bath's rim)."""
+    x0, y0, x1, y1 = rect
+    cx, cy = center
+    corners = np.array([[x1, y1], [x0, y1], [x0, y0], [x1, y0]]) - (cx, cy)
+    # Wedges break at the outline points that face the slab's corners, so that the outer
+    # edge of every wedge lies on one side of the slab.
+    corner_phi = np.arctan2(corners[:, 1] / b, corners[:, 0] / a)
+    even = np.linspace(-np.pi, np.pi, segments, endpoint=False)
+    gap = np.abs(np.angle(np.exp(1j * (even[:, None] - corner_phi[None, :]))))
+    phi = np.sort(np.concatenate([even[gap.min(axis=1) > 0.02], corner_phi]))
+
+    def ends(t: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        r = float(_superellipse(t, squareness))
+        inner = np.array([cx + a * r * np.cos(t), cy + b * r * np.sin(t)])
+        d = (inner - (cx, cy)) / np.hypot(inner[0] - cx, inner[1] - cy)
+        reach = [
+            ((hi if d[k] > 0 else lo) - c) / d[k]
+            for k, (lo, hi, c) in enumerate(((x0, x1, cx), (y0, y1, cy)))
+            if abs(d[k]) > 1e-12
+        ]
+        return inner, np.array([cx, cy]) + min(reach) * d
+
+    pieces = []
+    for t0, t1 in zip(phi, np.roll(phi, -1)):
+        e = (ends(t0), ends(t1))
+        c8 = np.array(
+            [[*e[(i >> 1) & 1][i & 1], z1 if i >> 2 else z0] for i in range(8)], dtype=np.float64
+        )
+        pieces.append(M.hexahedron(c8))
+    return pieces
+
+
+def _tap(x: float, y: float, z: float, height: float, reach: tuple[float, float]) -> list[M.Mesh]:
+    """A pillar tap standing on (x, y, z): a column and a spout bending out by ``reach`` (xy)."""
+    top = z + height - 0.02
+    end = (x + reach[0], y + reach[1])
+    spout = M.fillet_path([(x, y, top), (*end, top), (*end, top - 0.04)], 0.03)
+    return [M.cylinder(0.022, height, 16, center=(x, y, z - 0.002)), M.tube(spout, 0.011, 10)]
+
+
+def _toilet(p: _Params, wall_hung: bool) -> SceneObject:
+    """A WC: a bowl whose inside is a deep depression, a seat ring, a lid, and a cistern.
+
+    Floor-standing: a close-coupled suite, the pan on its foot and the cistern on its back.
+    Wall-hung: the pan hangs on the wall in front of a boxed cistern that reaches the
+    floor, or of a concealed one of which only the flush plate shows (then nothing
+    touches the floor: ``extra["wall_mounted"]``, ``dimensions["floor_clearance"]``).
+    The lid is up (leaning back), down on the seat, or missing.
+    """
+    seat_h = p.uniform("seat_height", *(WALL_WC_SEAT_HEIGHT if wall_hung else WC_SEAT_HEIGHT))
+    bw = p.uniform("bowl_width", *WC_BOWL_WIDTH)
+    proj = p.uniform("projection", *(WALL_WC_PROJECTION if wall_hung else WC_PROJECTION))
+    cw = p.uniform("cistern_width", *CISTERN_WIDTH)
+    cd = p.uniform("cistern_depth", *CISTERN_DEPTH)
+    c_top = p.uniform("cistern_height", *(WALL_CISTERN_HEIGHT if wall_hung else CISTERN_HEIGHT))
+    bowl_d = p.uniform("bowl_depth", *((0.16, 0.20) if wall_hung else (0.20, 0.26)))
+    seat_t = p.uniform("seat_thickness", 0.02, 0.03)
+    lid = p.choice("lid", ("up", "down", "none"), (4, 3, 1))
+    cistern = p.choice("cistern", ("boxed", "concealed")) if wall_hung else "close-coupled"
+    ceramic = p.color("color", SANITARY)
+    seat_color = p.color(
+        "seat_color", {"white": (240, 240, 236), "black": (32, 32, 34), "oak": WOOD["oak"]}
+    )
+    plate_color = p.color("plate_color", TAP, {"white": (236, 236, 232)})
+    asm = _Assembly()
+    rim = seat_h - seat_t - _GAP
+    a = bw / 2
+    # Bowl profile, radius 1 on the outline: up the outside to the rim, then down the
+    # inside into the trap's water surface.
+    inside = [(0.97, rim), (0.80, rim), (0.72, rim - 0.05), (0.42, rim - bowl_d + 0.02)]
+    inside.append((0.0, rim - bowl_d))
+    extra: dict[str, Any] = {}
+    dims: dict[str, float] = {}
+    if wall_hung:
+        y_back = cd if cistern == "boxed" else 0.0
+        b = proj / 2
+        zb = rim - 0.24
+        outside = [(0.0, zb), (0.55, zb), (0.85, zb + 0.08), (1.0, rim - 0.015)]
+    else:
+        # The bowl reaches 6 cm under the cistern, which stands on the pan's back.
+        y_back = cd
+        b = (proj - cd + 0.06) / 2
+        zb = 0.0
+        outside = [(0.0, 0.0), (0.62, 0.0), (0.60, 0.06), (0.66, 0.45 * rim), (0.92, rim - 0.06)]
+        outside.append((1.0, rim - 0.015))
+    yc = y_back + proj - b if wall_hung else proj - b
+    asm.add("bowl", _oval(outside + inside, a, b, center=(0.0, yc)), ceramic, group="bowl")
+    behind = yc - 0.84 * b  # the back of the pan, behind the depression
+    if wall_hung:
+        asm.add(
+            "bowl",
+            M.box_between((-0.5 * a, y_back, zb + 0.04), (0.5 * a, behind, rim - 0.01)),
+            ceramic,
+            group="bowl",
+        )
+        if cistern == "boxed":
+            box_w = cw + 0.16
+            asm.add(
+                "cistern",
+                M.box_between((-box_w / 2, 0.0, 0.0), (box_w / 2, cd, c_top)),
+                _shade(ceramic, 0.97),
+                group="cistern",
+            )
+            plate_y, plate_z = cd, c_top - 0.14
+        else:
+            plate_y, plate_z = 0.0, c_top - 0.08
+            extra["wall_mounted"] = True
+            dims["floor_clearance"] = zb
+        asm.add(
+            "flush_plate",
+            M.box((0.25, 0.012, 0.16), (0.0, plate_y + 0.006, plate_z)),
+            plate_color,
+            group="cistern",
+        )
+    else:
+        foot = M.tapered_box((0.5 * bw, behind - 0.03), (0.7 * bw, behind - 0.03), rim - 0.01)
+        asm.add("pedestal", foot.translated((0.0, (0.03 + behind) / 2, 0.0)), ceramic, group="bowl")
+        z_c = rim + _GAP
+        asm.add(
+            "cistern",
+            M.rounded_box(
+                (cw, cd, c_top - 0.02 - z_c), 0.02, center=(0.0, cd / 2, (z_c + c_top - 0.02) / 2)
+            ),
+            ceramic,
+            group="cistern",
+        )
+        asm.add(
+            "cistern",
+            M.box_between((-cw / 2 - 0.005, 0.0, c_top - 0.02), (cw / 2 + 0.005, cd + 0.01, c_top)),
+            ceramic,
+            group="cistern",
+        )
+    # Seat ring and lid: ovals from the hinge (just in front of the cistern) to the front.
+    y_hinge = y_back + (0.01 if not wall_hung else 0.015)
+    front = yc + b
+    bs = (front - y_hinge) / 2
+    y_seat = y_hinge + bs
+    as_ = 0.97 * a
+    ring = [(0.58, rim + _GAP), (1.0, rim + _GAP), (1.0, seat_h), (0.58, seat_h)]
+    asm.add(
+        "seat", _oval(ring, as_, bs, center=(0.0, y_seat), closed=True), seat_color, group="seat"
+    )
+    lt = 0.018
+    disc = [(0.0, 0.0), (1.0, 0.0), (1.0, lt), (0.0, lt)]
+    if lid == "down":
+        lid_mesh = _oval(disc, as_, bs, center=(0.0, y_seat)).translated((0, 0, seat_h + _GAP))
+        asm.add("lid", lid_mesh, seat_color, group="seat")
+    elif lid == "up":
+        upright = _oval(disc, as_, bs).rotated("x", np.pi / 2)  # its back face now at y = 0
+        lid_mesh = upright.translated((0.0, y_hinge + lt, seat_h + _GAP + bs))
+        asm.add("lid", lid_mesh, seat_color, group="lid")
+    dims.update(
+        seat_height=seat_h,
+        rim_height=rim,
+        bowl_width=bw,
+        bowl_depth=bowl_d,
+        projection=proj,
+        cistern_height=c_top,
+    )
+    extra.update(seat_part="seat", seat_center=[0.0, y_seat + 0.79 * bs], bowl_center=[0.0, yc])
+    return asm.build("toilet", p.kind, dims, extra)
+
+
+def _sink(p: _Params, style: str) -> SceneObject:
+    """A washbasin with a tap: on a pedestal, set in the top of a vanity unit whose closed
+    front reaches the floor, or hung on the wall with only its trap below (then nothing
+    touches the floor: ``extra["wall_mounted"]``). Any of them may have a backsplash."""
+    vanity = style == "vanity"
+    rim = p.uniform("rim_height", *BASIN_RIM_HEIGHT)
+    w = p.uniform("width", *(VANITY_WIDTH if vanity else BASIN_WIDTH))
+    d = p.uniform("depth", *(VANITY_DEPTH if vanity else BASIN_DEPTH))
+    bowl_d = p.uniform("bowl_depth", *BASIN_BOWL_DEPTH)
+    squareness = p.uniform("squareness", 2.0, 3.5)
+    backsplash = p.choice("backsplash", (True, False), (3, 1) if vanity else (1, 2))
+    splash_h = p.uniform("backsplash_height", *BACKSPLASH_HEIGHT)
+    tap_h = p.uniform("tap_height", 0.10, 0.18)
+    top_t = p.uniform("top_thickness", 0.02, 0.04)
+    fronts = p.choice("fronts", ("doors", "drawers"))
+    ceramic = p.color("color", SANITARY)
+    cabinet_color = p.color("cabinet_color", LAMINATE, WOOD)
+    splash_color = p.color("backsplash_color", CERAMIC, LAMINATE)
+    tap_color = p.color("tap_color", TAP)
+    handle_color = p.color("handle_color", METAL)
+    asm = _Assembly()
+    body_h = bowl_d + 0.04
+    # Basin profile, radius 1 on the outline: the underside, the rim, the bowl inside.
+    basin = [(0.0, rim - body_h), (0.75, rim - body_h), (0.95, rim - 0.05), (1.0, rim - 0.01)]
+    basin += [(0.98, rim), (0.84, rim), (0.78, rim - 0.02), (0.55, rim - bowl_d + 0.02)]
+    basin.append((0.0, rim - bowl_d))
+    extra: dict[str, Any] = {}
+    dims = {"rim_height": rim, "bowl_depth": bowl_d}
+    if not vanity:
+        a, b = w / 2, d / 2
+        yc = b
+        asm.add(
+            "basin",
+            _oval(basin, a, b, center=(0.0, yc), squareness=squareness),
+            ceramic,
+            group="basin",
+        )
+        # A ledge at the back for the tap.
+        ledge = 0.09
+        asm.add(
+            "basin",
+            M.box_between((-0.32 * w, 0.0, rim - 0.05), (0.32 * w, ledge, rim)),
+            ceramic,
+            group="basin",
+        )
+        tap_at, tap_z = (0.0, ledge / 2 + 0.005), rim
+        if style == "pedestal":
+            asm.add(
+                "pedestal",
+                M.frustum(0.10, 0.08, rim - body_h + 0.01, 24, center=(0.0, 0.6 * b, 0.0)),
+                ceramic,
+                group="pedestal",
+            )
+        else:
+            # A bottle trap under the waste, its pipe running back into the wall.
+            z_t = rim - body_h - 0.18
+            trap = [
+                M.cylinder(0.016, rim - bowl_d - z_t, 12, center=(0.0, yc, z_t)),
+                M.cylinder(0.032, 0.12, 16, center=(0.0, yc, z_t - 0.02)),
+                M.cylinder_between((0.0, yc, z_t + 0.03), (0.0, 0.0, z_t + 0.03), 0.016, 12),
+            ]
+            for m in trap:
+                asm.add("trap", m, tap_color, group="trap")
+            extra["wall_mounted"] = True
+            dims["floor_clearance"] = z_t - 0.02
+        splash_z = rim
+    else:
+        # The basin sits in a cut-out of the top with its rim 1 cm proud of it.
+        top = rim - 0.01
+        a, b = min(0.25, w / 2 - 0.08), min(0.20, (d - 0.16) / 2)
+        yc = d - 0.04 - b
+        for piece in _slab_with_hole(
+            (-w / 2, 0.0, w / 2, d), top - top_t, top, 0.9 * a, 0.9 * b, (0.0, yc), squareness
+        ):
+            asm.add("top", piece, splash_color, group="top")
+        asm.add(
+            "basin",
+            _oval(basin, a, b, center=(0.0, yc), squareness=squareness),
+            ceramic,
+            group="basin",
+        )
+        # The carcass: sides, back and bottom boards, closed by fronts down to the floor.
+        y_front = d - 0.03 - 0.018
+        under = top - top_t
+        carcass = [
+            M.box_between((-w / 2, 0.0, 0.0), (-w / 2 + 0.018, y_front, under)),
+            M.box_between((w / 2 - 0.018, 0.0, 0.0), (w / 2, y_front, under)),
+            M.box_between((-w / 2 + 0.018, 0.0, 0.0), (w / 2 - 0.018, 0.012, under)),
+            M.box_between((-w / 2 + 0.018, 0.012, 0.0), (w / 2 - 0.018, y_front, 0.02)),
+        ]
+        for m in carcass:
+            asm.add("body", m, cabinet_color, group="body")
+        drawers = fronts == "drawers"
+        _fronts(
+            asm,
+            -w / 2,
+            w / 2,
+            0.0,
+            under,
+            y_front,
+            (1 if w < 0.9 else 2) if drawers else max(1, round(w / 0.5)),
+            2 if drawers else 1,
+            "drawer" if drawers else "door",
+            cabinet_color,
+            handle_color,
+            "body",
+        )
+        tap_at, tap_z = (0.0, yc - b - 0.045), top
+        splash_z = top
+        dims["top_height"] = top
+    for m in _tap(*tap_at, tap_z, tap_h, (0.0, 0.10)):
+        asm.add("tap", m, tap_color, group="basin")
+    if backsplash:
+        asm.add(
+            "backsplash",
+            M.box_between((-w / 2, 0.0, splash_z), (w / 2, 0.012, splash_z + splash_h)),
+            splash_color,
+            group="backsplash",
+        )
+    dims.update(
+        basin_width=2 * a, basin_depth=2 * b, backsplash_height=splash_h if backsplash else 0.0
+    )
+    extra["basin_center"] = [0.0, yc]
+    return asm.build("sink", p.kind, dims, extra)
+
+
+def _bathtub(p: _Params) -> SceneObject:
+    """A built-in bath: a hollow tub under a rim deck, a front panel to the floor, a tap."""
+    length = p.uniform("length", *BATH_LENGTH)
+    width = p.uniform("width", *BATH_WIDTH)
+    rim = p.uniform("rim_height", *BATH_RIM_HEIGHT)
+    inner_d = p.uniform("inner_depth", *BATH_INNER_DEPTH)
+    rim_w = p.uniform("rim_width", 0.05, 0.10)
+    squareness = p.uniform("squareness", 3.0, 5.0)
+    tap_end = p.choice("tap_end", (-1, 1))
+    tap_h = p.uniform("tap_height", 0.08, 0.12)
+    ceramic = p.color("color", SANITARY)
+    panel_color = p.color("panel_color", SANITARY, LAMINATE)
+    tap_color = p.color("tap_color", TAP)
+    inner_d = min(inner_d, rim - BATH_INNER_BOTTOM)
+    zb = rim - inner_d
+    a, b = length / 2 - rim_w, width / 2 - rim_w
+    yc = width / 2
+    deck = 0.03
+    asm = _Assembly()
+    for piece in _slab_with_hole(
+        (-length / 2, 0.0, length / 2, width), rim - deck, rim, a, b, (0.0, yc), squareness, 48
+    ):
+        asm.add("rim", piece, ceramic, group="tub")
+    # The tub, radius 1 at the rim's opening: under the deck, down the inside to the bottom.
+    tub = [(0.0, zb - 0.03), (0.97, zb - 0.03), (1.04, zb + 0.05), (1.04, rim - 0.01)]
+    tub += [(1.0, rim - 0.01), (0.96, zb + 0.06), (0.85, zb), (0.0, zb)]
+    asm.add(
+        "tub",
+        _oval(tub, a, b, center=(0.0, yc), squareness=squareness, segments=48),
+        ceramic,
+        group="tub",
+    )
+    under = rim - deck
+    asm.add(
+        "panel",
+        M.box_between((-length / 2, width - 0.02, 0.0), (length / 2, width, under)),
+        panel_color,
+        group="panel",
+    )
+    for m in (
+        M.box_between((-length / 2, 0.0, 0.0), (length / 2, 0.02, under)),
+        M.box_between((-length / 2, 0.02, 0.0), (-length / 2 + 0.02, width - 0.02, under)),
+        M.box_between((length / 2 - 0.02, 0.02, 0.0), (length / 2, width - 0.02, under)),
+    ):
+        asm.add("side", m, panel_color, group="panel")
+    x_tap = tap_end * (length / 2 - rim_w / 2)
+    for m in _tap(x_tap, yc, rim, tap_h, (-tap_end * 0.08, 0.0)):
+        asm.add("tap", m, tap_color, group="tap")
+    dims = {"length": length, "rim_height": rim, "inner_depth": inner_d}
+    return asm.build("bathtub", p.kind, dims, {"tub_center": [0.0, yc]})
+
+
+# --------------------------------------------------------------------------------------
+# Lamps and TV stands.
+#
+# Table lamps for a bedside table (catalogue ranges): 30-60 cm high, the base 10-18 cm
+# across, the shade (a truncated cone) 20-40 cm across at its bottom. TV stands: low
+# sideboards 120-200 cm long, 35-50 cm deep, their top 40-60 cm up (a screen's middle
+# near the eye height of a seated viewer, about 1 m).
+
+LAMP_HEIGHT = (0.30, 0.60)
+LAMP_BASE_WIDTH = (0.10, 0.18)
+LAMP_SHADE_DIAMETER = (0.20, 0.40)
+TV_STAND_WIDTH = (1.2, 2.0)
+TV_STAND_DEPTH = (0.35, 0.50)
+TV_STAND_HEIGHT = (0.40, 0.60)
+
+
+def _lamp_table(p: _Params) -> SceneObject:
+    """A table lamp: a base, a stem, a bulb and a hollow conical shade open at both ends."""
+    height = p.uniform("height", *LAMP_HEIGHT)
+    bw = p.uniform("base_width", *LAMP_BASE_WIDTH)
+    shade_d = p.uniform("shade_diameter", *LAMP_SHADE_DIAMETER)
+    taper = p.uniform("shade_taper", 0.55, 0.9)
+    shade_frac = p.uniform("shade_fraction", 0.35, 0.5)
+    base_h = p.uniform("base_height", 0.02, 0.06)
+    stem_r = p.uniform("stem_radius", 0.006, 0.015)
+    base_shape = p.choice("base", ("round", "square"))
+    shade_color = p.color(
+        "shade_color",
+        {
+            "white": (236, 232, 220),
+            "linen": (214, 200, 176),
+            "grey": (150, 150, 150),
+            "black": (34, 34, 34),
+            "sage": (150, 166, 140),
+        },
+    )
+    base_color = p.color("base_color", METAL, CERAMIC, WOOD)
+    asm = _Assembly()
+    if base_shape == "round":
+        profile = [(0, 0), (bw / 2, 0), (bw / 2, 0.4 * base_h), (0.35 * bw, base_h), (0, base_h)]
+        asm.add("base", M.lathe(profile, 28), base_color, group="lamp")
+    else:
+        asm.add(
+            "base",
+            M.rounded_box((bw, bw, base_h), 0.01, center=(0.0, 0.0, base_h / 2)),
+            base_color,
+            group="lamp",
+        )
+    sh = shade_frac * height
+    z_shade = height - sh
+    z_bulb = z_shade + 0.25 * sh
+    asm.add(
+        "stem",
+        M.cylinder(stem_r, z_bulb - base_h + 0.002, 12, center=(0.0, 0.0, base_h - 0.002)),
+        _shade(base_color, 0.9),
+        group="lamp",
+    )
+    asm.add(
+        "bulb",
+        M.ellipsoid((0.025, 0.025, 0.03), center=(0.0, 0.0, z_bulb + 0.03)),
+        (250, 246, 230),
+        group="lamp",
+    )
+    r0, r1, wall = shade_d / 2, taper * shade_d / 2, 0.004
+    shade = M.lathe(
+        [(r0, z_shade), (r1, height), (r1 - wall, height), (r0 - wall, z_shade)], 32, True
+    )
+    asm.add("shade", shade, shade_color, group="lamp")
+    dims = {"height": height, "shade_diameter": shade_d, "base_width": bw}
+    return asm.build("lamp", p.kind, dims, {})
+
+
+def _tv_stand(p: _Params) -> SceneObject:
+    """A low, long cabinet with a closed front for a television (put one on it with
+    :func:`place_on`)."""
+    w = p.uniform("width", *TV_STAND_WIDTH)
+    d = p.uniform("depth", *TV_STAND_DEPTH)
+    h = p.uniform("top_height", *TV_STAND_HEIGHT)
+    base = p.choice("base", ("plinth", "legs"))
+    leg_h = p.uniform("leg_height", 0.06, 0.15)
+    fronts = p.choice("fronts", ("doors", "drawers"))
+    color = p.color("color", LAMINATE, WOOD)
+    handle_color = p.color("handle_color", METAL)
+    asm = _Assembly()
+    top_t = 0.025
+    if base == "plinth":
+        z0 = 0.05
+        asm.add(
+            "base",
+            M.box_between((-w / 2 + 0.03, -d / 2, 0.0), (w / 2 - 0.03, d / 2 - 0.05, z0 + 0.001)),
+            _shade(color, 0.6),
+            group="body",
+        )
+    else:
+        z0 = leg_h
+        for sx in (-1, 1):
+            for sy in (-1, 1):
+                asm.add(
+                    "leg",
+                    _leg(
+                        "tapered", sx * (w / 2 - 0.05), sy * (d / 2 - 0.05), 0.0, z0 + 0.001, 0.035
+                    ),
+                    _shade(color, 0.7),
+                    group="body",
+                )
+    y_front = d / 2 - 0.018 - 0.025  # the handles stay within the top's depth
+    asm.add(
+        "body",
+        M.box_between((-w / 2, -d / 2, z0), (w / 2, y_front, h - top_t)),
+        color,
+        group="body",
+    )
+    asm.add(
+        "top", M.box_between((-w / 2, -d / 2, h - top_t), (w / 2, d / 2, h)), color, group="body"
+    )
+    cols = max(2, round(w / 0.6))
+    part = "door" if fronts == "doors" else "drawer"
+    _fronts(asm, -w / 2, w / 2, z0, h - top_t, y_front, cols, 1, part, color, handle_color, "body")
+    extra = {"support_rect": [-w / 2, -d / 2, w / 2, d / 2], "support_z": h, "support_round": False}
+    return asm.build("tv_stand", p.kind, {"top_height": h}, extra)
+
+
+# --------------------------------------------------------------------------------------
 # The registry.
 
 _Builder = Callable[[_Params], SceneObject]
@@ -2501,6 +3374,18 @@ _BUILDERS: dict[str, tuple[str, _Builder]] = {
     "plant-small": ("plant", lambda p: _plant(p, True)),
     "bin": ("bin", _bin),
     "radiator": ("radiator", _radiator),
+    "chair-shell-curved": ("chair", lambda p: _chair_shell(p, curved=True)),
+    "chair-club": ("chair", lambda p: _easy_chair(p, False)),
+    "chair-wingback": ("chair", lambda p: _easy_chair(p, True)),
+    "chair-lounge": ("chair", _chair_lounge),
+    "toilet": ("toilet", lambda p: _toilet(p, False)),
+    "toilet-wall-hung": ("toilet", lambda p: _toilet(p, True)),
+    "sink-pedestal": ("sink", lambda p: _sink(p, "pedestal")),
+    "sink-vanity": ("sink", lambda p: _sink(p, "vanity")),
+    "sink-wall-hung": ("sink", lambda p: _sink(p, "wall-hung")),
+    "bathtub": ("bathtub", _bathtub),
+    "lamp-table": ("lamp", _lamp_table),
+    "tv-stand": ("tv_stand", _tv_stand),
 }
 
 #: Kind -> class name (a key of :data:`~ontodetect.synth.scene.CLASS_IDS`).

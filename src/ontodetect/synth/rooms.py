@@ -24,7 +24,7 @@ import dataclasses
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -32,10 +32,13 @@ from numpy.typing import NDArray
 from .._progress import progress
 from ..errors import InvalidParameterError
 from ..geometry import _mesh as M
-from .furniture import make_furniture, part_boxes, place
+from .furniture import make_furniture, part_boxes, place, place_on
 from .scene import OrientedBox, Scene, SceneObject, yaw_pose
 
-__all__ = ["ROOM_TYPES", "RoomShell", "build_room", "build_shell"]
+if TYPE_CHECKING:
+    from ..cloud import PointCloud
+
+__all__ = ["ROOM_TYPES", "RoomShell", "build_room", "build_shell", "object_scene"]
 
 #: The room types :func:`build_room` knows.
 ROOM_TYPES: tuple[str, ...] = (
@@ -48,6 +51,8 @@ ROOM_TYPES: tuple[str, ...] = (
     "kitchen",
     "corridor",
     "tiny",
+    "bathroom",
+    "hotel_room",
 )
 
 # Floor plans (length x width, metres) typical of each room type (Neufert; workplace
@@ -62,6 +67,8 @@ _ROOM_SIZES: dict[str, tuple[tuple[float, float], tuple[float, float]]] = {
     "kitchen": ((3.6, 5.0), (3.0, 4.0)),
     "corridor": ((6.0, 12.0), (1.8, 2.6)),
     "tiny": ((2.5, 2.5), (2.5, 2.5)),
+    "bathroom": ((2.2, 3.4), (1.9, 2.8)),
+    "hotel_room": ((3.8, 5.5), (3.2, 4.2)),
 }
 #: Clear ceiling height (at least 2.4 m in dwellings, 2.5 m in small offices).
 CEILING_HEIGHT = (2.5, 3.0)
@@ -119,6 +126,8 @@ _MIN_COUNTS: dict[str, dict[str, int]] = {
     "kitchen": {"table": 1, "chair": 2, "cabinet": 1, "stool": 1},
     "corridor": {"bench": 1},
     "tiny": {"table": 1, "chair": 1, "stool": 1},
+    "bathroom": {"toilet": 1, "sink": 1},
+    "hotel_room": {"bed": 1, "lamp": 1, "tv_stand": 1},
 }
 
 
@@ -976,6 +985,87 @@ def _tiny(lay: _Layout) -> None:
             break
 
 
+def _bathroom(lay: _Layout) -> None:
+    """A bath in a corner (most bathrooms), a WC and a washbasin against the walls."""
+    _radiators(lay, 0.5)
+    if lay.chance(0.75):
+        for _ in range(6):
+            bath = lay.furniture("bathtub")
+            if _against_wall(lay, bath, corner="any", gap=(0.0, 0.005), tries=6) is not None:
+                break
+    # Sanitary ware is fixed to the wall: no gap behind it.
+    for _ in range(6):
+        wc = lay.furniture(lay.pick(["toilet", "toilet", "toilet-wall-hung"]))
+        if _against_wall(lay, wc, gap=(0.0, 0.001)) is not None:
+            break
+    basin = None
+    for _ in range(6):
+        basin = lay.furniture(lay.pick(["sink-pedestal", "sink-vanity", "sink-wall-hung"]))
+        basin = _against_wall(lay, basin, gap=(0.0, 0.001))
+        if basin is not None:
+            break
+    if basin is not None and basin.kind != "sink-vanity" and lay.chance(0.25):
+        _beside(lay, basin, lay.furniture(basin.kind), gap=0.1)
+    if lay.chance(0.4):
+        tall = lay.furniture(
+            "cabinet", variant="tall", width=lay.uniform(0.35, 0.6), depth=lay.uniform(0.3, 0.4)
+        )
+        _against_wall(lay, tall, corner="any")
+    _plants_bins_boxes(lay, 0.3, 0.8, 0.0)
+
+
+def _hotel_room(lay: _Layout) -> None:
+    """A bed between nightstands with table lamps, a TV on a stand facing it, an easy chair."""
+    _radiators(lay)
+    bed = None
+    for _ in range(6):
+        bed = _against_wall(
+            lay, lay.furniture("bed", mattress_width=lay.pick([1.4, 1.6, 1.8])), tries=20
+        )
+        if bed is not None:
+            break
+    if bed is not None:
+        k, u0, u1 = lay.wall_of[id(bed)]
+        for side in (-1, 1):
+            if not lay.chance(0.9):
+                continue
+            stand = lay.furniture("nightstand")
+            w = stand.dimensions["width"]
+            uc = u1 + 0.01 + w / 2 if side > 0 else u0 - 0.01 - w / 2
+            placed = _against_wall(lay, stand, walls=[k], u=uc, tries=1)
+            if placed is not None and lay.chance(0.9):
+                shade = min(w, stand.dimensions["depth"]) - 0.08
+                lamp = lay.furniture("lamp-table", shade_diameter=lay.uniform(0.2, max(0.2, shade)))
+                _on_top(lay, placed, lamp, spot=(0.4, 0.4, 0.6, 0.6), yaw=(-0.3, 0.3))
+    walls = [(lay.wall_of[id(bed)][0] + 2) % 4] if bed is not None else None
+    tv_stand = None
+    for _ in range(4):
+        tv_stand = _against_wall(lay, lay.furniture("tv-stand"), walls=walls, tries=15)
+        if tv_stand is not None:
+            break
+        walls = None
+    if tv_stand is not None and lay.chance(0.85):
+        screen = min(1.3, tv_stand.dimensions["width"] - 0.2)
+        tv = lay.furniture("television", screen_width=lay.uniform(0.9, max(0.9, screen)))
+        _on_top(lay, tv_stand, tv, spot=(0.4, 0.3, 0.6, 0.5), yaw=(-0.05, 0.05))
+    for _ in range(1 + lay.n(0.4)):
+        easy = lay.furniture(
+            lay.pick(["chair-club", "chair-club", "chair-wingback", "chair-lounge"])
+        )
+        if _against_wall(lay, easy, gap=(0.05, 0.3)) is None:
+            _free(lay, easy)
+    if lay.chance(0.5):
+        _desk_with_chair(
+            lay,
+            lay.furniture("desk-panel", width=lay.uniform(1.0, 1.4)),
+            lay.furniture(lay.pick(["chair-4leg", "chair-4leg-arms", "chair-shell-curved"])),
+            equipment=False,
+        )
+    if lay.chance(0.6):
+        _against_wall(lay, lay.furniture("closet", width=lay.uniform(0.8, 1.4)), corner="any")
+    _plants_bins_boxes(lay, 0.6, 0.6, 0.3)
+
+
 _PROGRAMS: dict[str, Callable[[_Layout], None]] = {
     "office": _office,
     "conference": _conference,
@@ -986,6 +1076,8 @@ _PROGRAMS: dict[str, Callable[[_Layout], None]] = {
     "kitchen": _kitchen,
     "corridor": _corridor,
     "tiny": _tiny,
+    "bathroom": _bathroom,
+    "hotel_room": _hotel_room,
 }
 
 
@@ -1384,8 +1476,10 @@ def build_room(
     room_type : str
         One of :data:`ROOM_TYPES`: ``"office"``, ``"conference"``, ``"living_room"``,
         ``"home_office"``, ``"dining_room"``, ``"bedroom"``, ``"kitchen"``,
-        ``"corridor"``, or ``"tiny"`` (2.5 x 2.5 m with one table, one chair and
-        one stool, for quick tests).
+        ``"corridor"``, ``"tiny"`` (2.5 x 2.5 m with one table, one chair and
+        one stool, for quick tests), ``"bathroom"`` (WC, washbasin, mostly a bath)
+        or ``"hotel_room"`` (bed, nightstands with table lamps, a TV on a stand,
+        easy chairs).
     seed : int or numpy.random.Generator
         The same integer always gives the same scene. A generator is used to
         draw an integer seed, which the scene records.
@@ -1446,3 +1540,118 @@ def build_room(
         "openings": [dataclasses.asdict(o) for o in lay.openings],
     }
     return Scene(room_type, (L, W, H), objects, seed_int, extra)
+
+
+# --------------------------------------------------------------------------------------
+# A few chosen objects in an empty room, scanned.
+
+#: Gap between neighbouring objects, and from the corner, in :func:`object_scene`.
+OBJECT_SCENE_GAP = 0.1
+#: Ceiling height of :func:`object_scene`'s room unless one is given.
+OBJECT_SCENE_HEIGHT = 2.6
+
+
+def object_scene(
+    objects: Sequence[Any],
+    room: Sequence[float] = (3.0, 3.0),
+    *,
+    sensor: str = "rgbd",
+    points: int | None = 30000,
+    seed: int = 0,
+    **sensor_opts: Any,
+) -> tuple[PointCloud, Scene]:
+    """Scan a few chosen objects standing side by side in a corner of a small empty room.
+
+    The objects stand with their backs to the wall y = 0, from the corner at the
+    origin along x, 10 cm apart; the room has no doors or windows. This is the quick
+    way to get a labelled cloud of chosen furniture, e.g. a WC and a washbasin, or a
+    nightstand with a lamp on it.
+
+    Parameters
+    ----------
+    objects : sequence
+        Each item is a kind (``"toilet"``, built from ``seed``), a built
+        :class:`~ontodetect.synth.scene.SceneObject` (in its own frame), or a group
+        ``(support, item, ...)`` of those: the support stands on the floor and the
+        items on its top, side by side (see :func:`~ontodetect.synth.furniture.place_on`).
+    room : (2,) or (3,) float
+        Length (x), width (y) and optionally height (z) of the room, metres.
+    sensor : str
+        As :func:`~ontodetect.synth.dataset.synthesize`: ``"rgbd"`` (frames fused),
+        ``"rgbd-frame"``, ``"tls"`` or ``"monocular"``.
+    points : int, optional
+        About this many points (see :func:`~ontodetect.synth.dataset.synthesize`).
+    seed : int
+        Seed of the objects built from kinds, the room's colours and the sensor.
+    **sensor_opts
+        Options of the sensor.
+
+    Returns
+    -------
+    cloud : PointCloud
+        The points with the fields ``instance`` and ``class_id`` (0 for misses).
+    scene : Scene
+        Room type ``"objects"``: floor, ceiling and four walls (instance ids 1-6),
+        then the objects in the order given, each group's support before its items.
+
+    Examples
+    --------
+    >>> cloud, scene = object_scene(["toilet", ("nightstand", "lamp-table")], points=3000)
+    >>> [o.class_name for o in scene.objects if not o.is_structure]
+    ['toilet', 'cabinet', 'lamp']
+    >>> lamp = scene.objects[-1].instance_id
+    >>> bool((cloud.fields["instance"] == lamp).any())
+    True
+    """
+    from .dataset import synthesize  # lazy: the dataset module imports this one
+
+    try:
+        dims = tuple(float(v) for v in room)
+    except (TypeError, ValueError):
+        dims = ()
+    if len(dims) not in (2, 3) or not all(math.isfinite(v) and v >= 1.5 for v in dims):
+        raise InvalidParameterError(
+            "room", "(length, width) or (length, width, height), each at least 1.5 m", room
+        )
+    L, W = dims[0], dims[1]
+    H = dims[2] if len(dims) == 3 else OBJECT_SCENE_HEIGHT
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise InvalidParameterError("seed", "an integer >= 0", seed)
+    rng = np.random.default_rng(int(seed))
+
+    def built(item: Any) -> SceneObject:
+        if isinstance(item, SceneObject):
+            return item
+        if isinstance(item, str):
+            return make_furniture(item, rng)
+        raise InvalidParameterError("objects", "kinds, SceneObjects or groups of them", item)
+
+    placed: list[SceneObject] = []
+    x = OBJECT_SCENE_GAP
+    for item in objects:
+        group = [built(i) for i in item] if isinstance(item, (list, tuple)) else [built(item)]
+        if not group:
+            raise InvalidParameterError("objects", "no empty group", item)
+        support, on_top = group[0], group[1:]
+        w, d = support.dimensions["width"], support.dimensions["depth"]
+        if x + w > L - OBJECT_SCENE_GAP or d > W - OBJECT_SCENE_GAP:
+            raise InvalidParameterError(
+                "objects", f"objects that fit side by side along a {L:g} m wall", item
+            )
+        support = place(support, x + w / 2, d / 2, 0.0)
+        placed.append(support)
+        for i, thing in enumerate(on_top):
+            placed.append(place_on(thing, support, ((i + 0.5) / len(on_top), 0.5)))
+        x += w + OBJECT_SCENE_GAP
+    lay = _Layout(rng, "objects", (L, W, H), 0.0)
+    thickness = float(np.mean(WALL_THICKNESS))
+    structure = _structure(lay, thickness)
+    scene = Scene(
+        "objects",
+        (L, W, H),
+        [dataclasses.replace(o, instance_id=i + 1) for i, o in enumerate(structure + placed)],
+        int(seed),
+        {"wall_thickness": thickness, "clutter": 0.0, "openings": []},
+    )
+    result = synthesize(scene, sensor, int(seed), points=points, **sensor_opts)
+    return result.cloud, scene
