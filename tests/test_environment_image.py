@@ -281,7 +281,7 @@ def test_files_that_are_not_model_files(tmp_path):
     np.savez(no_header, xyz=np.zeros((4, 3)))
     with pytest.raises(CorruptFileError, match="no 'header'"):
         EnvironmentModel.load(no_header)
-    with pytest.raises(ReadError, match="no such environment model file"):
+    with pytest.raises(ReadError, match="no such model file"):
         EnvironmentModel.load(tmp_path / "missing.npz")
 
 

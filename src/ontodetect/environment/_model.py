@@ -292,7 +292,7 @@ class EnvironmentModel:
             Not a model file, another format version, or arrays that disagree.
         """
         p = Path(path)
-        header, arrays = read_array_archive(p, "environment model file")
+        header, arrays = read_array_archive(p, "model file")
         if header.get("format") != MODEL_FORMAT:
             raise CorruptFileError(p, f"format {header.get('format')!r}, expected {MODEL_FORMAT!r}")
         classes = header.get("classes")
