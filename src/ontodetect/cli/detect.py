@@ -17,6 +17,7 @@ from ..io import expand_inputs, read_cloud
 from . import app
 from ._common import load_config, load_ontology_option, number_list, room_option
 from ._console import console, reporting, state
+from .env import scene_image_room
 
 
 @app.command()
@@ -50,6 +51,16 @@ def detect(
     ),
     room_probs: Path | None = typer.Option(
         None, "--room-probs", help="YAML/JSON mapping room category -> probability."
+    ),
+    scene_image: Path | None = typer.Option(
+        None,
+        "--scene-image",
+        metavar="IMAGE_OR_DIR",
+        help="Photograph(s) of the scene: the room prior P_N from them (frames averaged); "
+        "with --env-model.",
+    ),
+    env_model: Path | None = typer.Option(
+        None, "--env-model", metavar="MODEL", help="Model file from 'ontodetect env train'."
     ),
     indoor: float | None = typer.Option(None, "--indoor", help="P(indoor), Eq. 3.5."),
     up: str | None = typer.Option(None, "--up", help="Up axis: z (default), auto, y, -y, ..."),
@@ -147,6 +158,7 @@ def detect(
     )
     onto = load_ontology_option(ontology, ontology_only)
     room_arg = room_option(room, room_probs)
+    room_arg = scene_image_room(scene_image, env_model, room, room_probs) or room_arg
     eye = number_list(viewpoint, float, "--viewpoint")
     if eye is not None:
         eye = as_position(eye, "--viewpoint")
