@@ -197,7 +197,17 @@ HEAVY = (
     "scipy.spatial",
     "scipy.sparse",
 )
-STAGES = ("pipeline", "segment", "ontology", "labeling", "cad", "synth", "evaluation", "calibrate")
+STAGES = (
+    "pipeline",
+    "segment",
+    "ontology",
+    "environment",
+    "labeling",
+    "cad",
+    "synth",
+    "evaluation",
+    "calibrate",
+)
 
 
 def _fresh_modules(code: str) -> set[str]:

@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from ontodetect import point_cloud
-from ontodetect.summary import describe_cloud, estimate_spacing, guess_units, guess_up_axis
+from ontodetect.summary import describe_cloud, estimate_spacing, guess_units, guess_up
 
 
 def _room(rng, up_axis=2, sign=1, scale=1.0, n=20000):
@@ -19,12 +19,12 @@ def _room(rng, up_axis=2, sign=1, scale=1.0, n=20000):
 
 
 @pytest.mark.parametrize(
-    ("axis", "sign", "expected"), [(2, 1, "+z"), (1, 1, "+y"), (0, 1, "+x"), (2, -1, "-z")]
+    ("axis", "sign", "expected"), [(2, 1, "z"), (1, 1, "y"), (0, 1, "x"), (2, -1, "-z")]
 )
 def test_up_axis_guess(rng, axis, sign, expected):
-    up, conf = guess_up_axis(_room(rng, axis, sign))
-    assert up == expected
-    assert conf > 0.4
+    up = guess_up(_room(rng, axis, sign), "auto")
+    assert up.axis == expected and up.choice == "auto"
+    assert up.angle < 2.0 and up.confidence > 0.4
 
 
 def test_units_guess(rng):
@@ -42,7 +42,7 @@ def test_describe_cloud(rng):
     s = describe_cloud(cloud)
     assert s.num_points == 35000
     assert s.fields == ["label"]
-    assert s.up_axis == "+z"
+    assert s.up_axis == "z" and s.up_default == "z"
     assert s.extent[0] == pytest.approx(5.0, abs=0.05)
     d = s.to_dict()
     assert d["units"] == "metres"
@@ -56,5 +56,6 @@ def test_describe_cloud_tells_a_single_view_from_a_fused_scan(rng):
         organized=True, width=4, height=2, viewpoint=[0.5, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]
     )
     assert describe_cloud(frame).sensor == [0.5, 0.0, 0.0]
+    assert describe_cloud(frame).up_default == "auto" and fused.up_default == "z"
     # an unorganized cloud's VIEWPOINT (a PCD default) says nothing about one view
     assert describe_cloud(frame.with_meta(organized=False)).sensor is None

@@ -8,6 +8,8 @@ Subpackages, in the order the data flows:
 - ``preprocess``: scale, denoise, level, voxelize; floor, walls and ceiling.
 - ``segment``: candidate clusters and their MSAC planes with features.
 - ``ontology``: probabilistic ontological scoring of clusters against object classes.
+- ``environment``: the room prior P_N from photographs (GIST and a calibrated SVM), and
+  how it combines with P_N from the scan.
 - ``labeling``: energy minimisation that picks one label per cluster.
 - ``cad``: generic CAD models fitted with ground-constrained ICP; the object map.
 - ``pipeline``: :func:`detect`, the whole method in one call, and its output types.
@@ -36,6 +38,7 @@ __all__ = [
     "CorruptFileError",
     "DataWarning",
     "Detection",
+    "EnvironmentModel",
     "InvalidOntologyError",
     "InvalidParameterError",
     "OntoDetectError",
@@ -45,15 +48,25 @@ __all__ = [
     "UnsupportedFormatError",
     "WriteError",
     "__version__",
+    "combine_room_priors",
     "detect",
     "point_cloud",
+    "predict_environment",
     "read_cloud",
+    "train_environment",
     "write_cloud",
 ]
 
 #: Names re-exported from ``pipeline``, imported when first used: ``import ontodetect``
 #: stays light (the CLI's start-up), ``from ontodetect import detect`` works.
 _FROM_PIPELINE = ("Detection", "Result", "detect")
+#: Names re-exported from ``environment``, imported when first used (start-up, as above).
+_FROM_ENVIRONMENT = (
+    "EnvironmentModel",
+    "combine_room_priors",
+    "predict_environment",
+    "train_environment",
+)
 
 
 def __getattr__(name: str):
@@ -61,6 +74,10 @@ def __getattr__(name: str):
         from . import pipeline  # lazy: import ontodetect without the stages (start-up)
 
         return getattr(pipeline, name)
+    if name in _FROM_ENVIRONMENT:
+        from . import environment  # lazy: import ontodetect without the stages (start-up)
+
+        return getattr(environment, name)
     if name == "Config":
         from .config import Config  # lazy: `info` needs no configuration (start-up)
 

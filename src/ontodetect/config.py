@@ -115,7 +115,7 @@ def _param(default: Any, rule: _Rule, doc: str) -> Any:
     return field(default=default, metadata={"rule": rule, "doc": doc})
 
 
-UP_CHOICES = ("z", "-z", "y", "-y", "x", "-x", "auto")
+UP_CHOICES = ("z", "-z", "y", "-y", "x", "-x", "auto", "auto-frame")
 
 
 def validate_section(section: Any) -> dict[str, Any]:
@@ -192,10 +192,13 @@ class PrepareConfig(_Section):
     guess_units: bool = _param(
         True, Boolean(), "Rescale clouds whose size says millimetres to metres."
     )
+    # A camera frame is rarely level and its y points down; a fused room scan or map
+    # is z up (ScanNet, lidar), and estimating its axis would only move its results.
     up: str = _param(
-        "z",
+        "auto-frame",
         OneOf(UP_CHOICES),
-        "Up axis of the input, or 'auto' to estimate it from floor and walls.",
+        "Up axis of the input, 'auto' to estimate it from floor and walls, or "
+        "'auto-frame': auto for an organized or single-view cloud, z otherwise.",
     )
     # Scans drift and maps are rarely exactly level: the floor's own normal is taken as up
     # when it is within a few degrees of the given or estimated axis.

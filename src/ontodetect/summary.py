@@ -3,8 +3,8 @@
 :func:`describe_cloud` is what ``ontodetect info`` prints. The guesses are
 heuristics a person would make looking at the numbers: indoor rooms are a few
 metres across (so a cloud tens of thousands of units wide is in millimetres),
-and the up axis is the one along which the most points sit on a few large
-horizontal planes (floor, ceiling, table tops).
+and the up axis is what ``detect --up auto`` would use (:func:`ontodetect._up.guess_up`,
+the one heuristic both share: floor, walls and furniture tops of a Manhattan frame).
 """
 
 from __future__ import annotations
@@ -14,11 +14,12 @@ from typing import Any
 
 import numpy as np
 
-from ._units import SAMPLE_SIZE, _sample, estimate_spacing, guess_units
+from ._units import estimate_spacing, guess_units
+from ._up import guess_up
 from .cloud import PointCloud, pixel_grid, sensor_position
 from .errors import InvalidParameterError
 
-__all__ = ["CloudSummary", "describe_cloud", "estimate_spacing", "guess_units", "guess_up_axis"]
+__all__ = ["CloudSummary", "describe_cloud", "estimate_spacing", "guess_units", "guess_up"]
 
 
 @dataclass(frozen=True)
@@ -37,8 +38,16 @@ class CloudSummary:
     spacing: float
     density: float
     units: str
+    #: The signed axis (``"z"``, ``"-y"``...) nearest to the up direction ``detect --up
+    #: auto`` would estimate, that direction, its angle (deg) from the axis, and the
+    #: confidence of the estimate (:func:`ontodetect._up.guess_up`).
     up_axis: str
     up_confidence: float
+    up_vector: list[float]
+    up_tilt: float
+    #: What ``detect`` uses without ``--up``: ``"auto"`` for an organized or single-view
+    #: cloud, ``"z"`` for any other.
+    up_default: str
     extra: dict[str, Any] = field(default_factory=dict)
     #: Where the sensor stood when the cloud is one camera frame with its pixel grid
     #: (:func:`ontodetect.cloud.sensor_position`), else None.
@@ -47,51 +56,6 @@ class CloudSummary:
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON-ready dictionary."""
         return asdict(self)
-
-
-def guess_up_axis(
-    xyz: np.ndarray, *, sample: int = SAMPLE_SIZE, seed: int = 0
-) -> tuple[str, float]:
-    """Which signed axis points up, and how sure the guess is (0..1).
-
-    Indoors, the floor, ceiling and table tops are large planes perpendicular to
-    the up axis, so coordinates along that axis pile up in a few histogram bins.
-    The sign says where the floor is: most points lie above it, and the floor
-    holds more points than the ceiling in a scan.
-
-    Returns
-    -------
-    axis : str
-        One of ``"+x" "-x" "+y" "-y" "+z" "-z"``.
-    confidence : float
-        Share of the best axis's concentration score among the three.
-    """
-    xyz = np.asarray(xyz, dtype=np.float64)
-    if len(xyz) < 10:
-        return "+z", 0.0
-    pts = _sample(xyz, sample, seed)
-    scores = []
-    for a in range(3):
-        c = pts[:, a]
-        span = float(np.ptp(c))
-        if span <= 0:
-            scores.append(0.0)
-            continue
-        bins = max(10, int(span / 0.02)) if span < 100 else 200
-        hist, _ = np.histogram(c, bins=min(bins, 2000))
-        top = np.sort(hist)[::-1][: max(2, len(hist) // 50)]
-        scores.append(float(top.sum()) / len(c))
-    scores_arr = np.asarray(scores)
-    axis = int(np.argmax(scores_arr))
-    conf = float(scores_arr[axis] / scores_arr.sum()) if scores_arr.sum() > 0 else 0.0
-    c = pts[:, axis]
-    lo, hi = np.percentile(c, [2, 98])
-    # The floor side holds more points in its lowest tenth than the ceiling side.
-    band = (hi - lo) * 0.1
-    n_low = int(np.count_nonzero(c < lo + band))
-    n_high = int(np.count_nonzero(c > hi - band))
-    sign = "+" if n_low >= n_high else "-"
-    return f"{sign}{'xyz'[axis]}", conf
 
 
 def describe_cloud(cloud: PointCloud, *, seed: int = 0) -> CloudSummary:
@@ -113,7 +77,7 @@ def describe_cloud(cloud: PointCloud, *, seed: int = 0) -> CloudSummary:
     ext = hi - lo
     # Points per square metre of surface: one point per spacing² cell.
     density = 1.0 / spacing**2 if spacing > 0 else 0.0
-    up, conf = guess_up_axis(xyz, seed=seed)
+    up = guess_up(cloud, "auto")
     extra = {k: v for k, v in cloud.meta.items() if k not in ("source", "format")}
     return CloudSummary(
         source=cloud.meta.get("source"),
@@ -128,8 +92,11 @@ def describe_cloud(cloud: PointCloud, *, seed: int = 0) -> CloudSummary:
         spacing=spacing,
         density=density,
         units=guess_units(xyz, spacing),
-        up_axis=up,
-        up_confidence=conf,
+        up_axis=up.axis,
+        up_confidence=up.confidence,
+        up_vector=[round(float(v), 6) for v in up.direction],
+        up_tilt=round(up.angle, 3),
+        up_default="auto" if up.single_view else "z",
         extra={k: v for k, v in extra.items() if isinstance(v, (str, int, float, bool, list))},
         sensor=_single_view_sensor(cloud),
     )

@@ -57,7 +57,7 @@ def _global_options(
 # Importing a command module registers its command(s) on ``app``. The command modules
 # import the library's stages inside the commands, so that building the CLI (--help,
 # --version) imports none of them.
-from . import cad, calibrate, demo, detect, evaluate, info, segment, synth, view  # noqa: E402, F401
+from . import cad, calibrate, demo, detect, env, evaluate, info, segment, synth, view  # noqa: E402, F401
 
 #: Global options that may also be given after the command (``detect ... -q``).
 GLOBAL_FLAGS = frozenset({"-q", "--quiet", "-v", "--verbose"})

@@ -14,7 +14,15 @@ from rich.progress import (
 
 from .._progress import use_reporter
 
-__all__ = ["RichReporter", "console", "err_console", "reporting", "setup_output", "state"]
+__all__ = [
+    "RichReporter",
+    "console",
+    "err_console",
+    "reporting",
+    "setup_output",
+    "showing_progress",
+    "state",
+]
 
 #: Line width when the output is not a terminal: long enough never to wrap (file names
 #: and JSON stay on one line for grep and pipes).
@@ -88,8 +96,14 @@ class RichReporter:
             self._progress.stop()
 
 
+def showing_progress() -> bool:
+    """Whether progress bars are shown: not with ``--quiet``, nor when stderr is not a
+    terminal (a pipe, a file, a CI log)."""
+    return not state.quiet and err_console.is_terminal
+
+
 def reporting():
     """Context manager: progress bars on unless ``--quiet`` (or stderr is not a terminal)."""
-    if state.quiet or not err_console.is_terminal:
+    if not showing_progress():
         return use_reporter(None)
     return use_reporter(RichReporter())

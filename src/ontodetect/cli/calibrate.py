@@ -96,7 +96,12 @@ def calibrate(
     room: str | None = typer.Option(
         None, "--room", help="Room category for the prior in the held-out comparison."
     ),
-    up: str | None = typer.Option(None, "--up", help="Up axis: z (default), auto, y, -y, ..."),
+    up: str | None = typer.Option(
+        None,
+        "--up",
+        help="Up axis: z, -y, ..., auto (estimate it), or auto-frame (default: auto for "
+        "an organized or single-view cloud, z otherwise).",
+    ),
     scale: float | None = typer.Option(None, "--scale", help="Scale factor k_s to metres."),
     threshold: float | None = typer.Option(
         None, "--threshold", help="Decision threshold (detect.threshold; Table 4.1: 0.15)."

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import json
 from pathlib import Path
@@ -16,7 +17,8 @@ from ..geometry import jsonable
 from ..io import expand_inputs, read_cloud
 from . import app
 from ._common import load_config, load_ontology_option, number_list, room_option
-from ._console import console, reporting, state
+from ._console import console, reporting, showing_progress, state
+from .env import scene_image_room
 
 
 @app.command()
@@ -52,8 +54,23 @@ def detect(
     room_probs: Path | None = typer.Option(
         None, "--room-probs", help="YAML/JSON mapping room category -> probability."
     ),
+    scene_image: Path | None = typer.Option(
+        None,
+        "--scene-image",
+        metavar="IMAGE_OR_DIR",
+        help="Photograph(s) of the scene: the room prior P_N from them (frames averaged); "
+        "with --env-model.",
+    ),
+    env_model: Path | None = typer.Option(
+        None, "--env-model", metavar="MODEL", help="Model file from 'ontodetect env train'."
+    ),
     indoor: float | None = typer.Option(None, "--indoor", help="P(indoor), Eq. 3.5."),
-    up: str | None = typer.Option(None, "--up", help="Up axis: z (default), auto, y, -y, ..."),
+    up: str | None = typer.Option(
+        None,
+        "--up",
+        help="Up axis: z, -y, ..., auto (estimate it), or auto-frame (default: auto for "
+        "an organized or single-view cloud, z otherwise).",
+    ),
     scale: float | None = typer.Option(None, "--scale", help="Scale factor k_s to metres."),
     viewpoint: str | None = typer.Option(
         None,
@@ -155,6 +172,7 @@ def detect(
     )
     onto = load_ontology_option(ontology, ontology_only)
     room_arg = room_option(room, room_probs)
+    room_arg = scene_image_room(scene_image, env_model, room, room_probs) or room_arg
     eye = number_list(viewpoint, float, "--viewpoint")
     if eye is not None:
         eye = as_position(eye, "--viewpoint")
@@ -269,17 +287,29 @@ def _scan_names(inputs: list[Path]) -> list[str]:
     return names
 
 
-def _detect_unit(unit: tuple[Path, Path], format, detect_options, write_options) -> dict:
-    """One scan of a batch (module level: picklable for worker processes)."""
+def _detect_unit(
+    unit: tuple[Path, Path], format, detect_options, write_options, stages=None
+) -> dict:
+    """One scan of a batch (module level: picklable for worker processes); its stages go
+    to ``stages`` (a queue) when progress rows are shown."""
+    from .._progress import use_reporter  # lazy: CLI start-up
     from ..outputs import detect_file  # lazy: CLI start-up
+    from ._scans import StageSender  # lazy: only with progress rows
 
     path, folder = unit
+    sender = None if stages is None else StageSender(stages, folder.name)
+    if sender is not None:
+        sender.begin()
     try:
-        files = detect_file(
-            path, folder, format=format, detect_options=detect_options, **write_options
-        )
+        with use_reporter(sender):
+            files = detect_file(
+                path, folder, format=format, detect_options=detect_options, **write_options
+            )
     except OntoDetectError as exc:
         return {"input": str(path), "out": str(folder), "error": str(exc)}
+    finally:
+        if sender is not None:
+            sender.end()
     doc = json.loads(files.detections.read_text(encoding="utf-8"))
     return {
         "input": str(path),
@@ -296,8 +326,11 @@ def _detect_many(inputs, out, *, jobs, as_json, format, detect_options, **write_
     fn = functools.partial(
         _detect_unit, format=format, detect_options=detect_options, write_options=write_options
     )
-    with reporting():
-        rows = map_scenes(fn, units, jobs=jobs, description="Scans")
+    if not showing_progress():
+        with reporting():
+            rows = map_scenes(fn, units, jobs=jobs, description="Scans")
+    else:
+        rows = _detect_with_rows(fn, units, jobs)
     failed = [r for r in rows if "error" in r]
     if as_json:
         typer.echo(json.dumps(rows))
@@ -312,6 +345,27 @@ def _detect_many(inputs, out, *, jobs, as_json, format, detect_options, **write_
         console.print(Text.assemble(("failed", "red"), f" {r['input']}: {r['error']}"))
     if failed:
         raise typer.Exit(2)
+
+
+def _detect_with_rows(fn, units, jobs) -> list[dict]:
+    """``map_scenes`` with a progress row per scan in flight (its stage) and an overall row."""
+    import queue
+
+    from .._parallel import pool_context  # lazy: CLI start-up
+    from .._progress import use_reporter  # lazy: CLI start-up
+    from ..evaluation import map_scenes  # lazy: CLI start-up
+    from ._scans import scan_rows  # lazy: only with progress rows
+
+    with contextlib.ExitStack() as stack:
+        if jobs != 1 and len(units) > 1:  # worker processes (0: one per CPU)
+            channel = stack.enter_context(pool_context().Manager()).Queue()
+        else:
+            channel = queue.SimpleQueue()
+        shown = stack.enter_context(scan_rows(channel))
+        stack.enter_context(use_reporter(shown))
+        return map_scenes(
+            functools.partial(fn, stages=channel), units, jobs=jobs, description="Scans"
+        )
 
 
 def _print_explain(rows) -> None:

@@ -71,7 +71,12 @@ def eval_(
         None, "--room-probs", help="YAML/JSON mapping room category -> probability."
     ),
     indoor: float | None = typer.Option(None, "--indoor", help="P(indoor), Eq. 3.5."),
-    up: str | None = typer.Option(None, "--up", help="Up axis: z (default), auto, y, -y, ..."),
+    up: str | None = typer.Option(
+        None,
+        "--up",
+        help="Up axis: z, -y, ..., auto (estimate it), or auto-frame (default: auto for "
+        "an organized or single-view cloud, z otherwise).",
+    ),
     scale: float | None = typer.Option(None, "--scale", help="Scale factor k_s to metres."),
     threshold: float | None = typer.Option(
         None, "--threshold", help="Decision threshold (detect.threshold; Table 4.1: 0.15)."

@@ -49,7 +49,18 @@ def info(
     table.add_row("point spacing", f"{summary.spacing:.4g} (median nearest neighbour)")
     table.add_row("density", f"{summary.density:,.0f} points per square unit")
     table.add_row("units (guess)", summary.units)
-    table.add_row("up axis (guess)", f"{summary.up_axis} (confidence {summary.up_confidence:.2f})")
+    tilt = f", tilted {summary.up_tilt:.1f}°" if summary.up_tilt >= 0.5 else ""
+    table.add_row(
+        "up axis (guess)",
+        f"{summary.up_axis}{tilt} (confidence {summary.up_confidence:.2f}): what "
+        "'detect --up auto' uses",
+    )
+    table.add_row(
+        "detect's up",
+        "auto (an organized or single-view cloud)"
+        if summary.up_default == "auto"
+        else "z (not a single view; --up auto to estimate it, --up -y... to name it)",
+    )
     for k, v in summary.extra.items():
         table.add_row(k, str(v))
     if summary.sensor is not None:

@@ -70,7 +70,12 @@ def segment(
         metavar="KEY=VALUE",
         help="Override one parameter, e.g. --set cluster.radius=0.04",
     ),
-    up: str | None = typer.Option(None, "--up", help="Up axis: z (default), auto, y, -y, ..."),
+    up: str | None = typer.Option(
+        None,
+        "--up",
+        help="Up axis: z, -y, ..., auto (estimate it), or auto-frame (default: auto for "
+        "an organized or single-view cloud, z otherwise).",
+    ),
     scale: float | None = typer.Option(None, "--scale", help="Scale factor k_s to metres."),
     seed: int = typer.Option(0, "--seed", help="Seed of every random step."),
 ) -> None:

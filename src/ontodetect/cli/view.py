@@ -20,7 +20,8 @@ def view(
         250_000, "--max-points", help="Points the page carries at most (decimated above)."
     ),
 ) -> None:
-    """Write view.html: points, boxes with labels and scores, per-class toggles; no network."""
+    """Write view.html: points, boxes with labels and scores, per-class toggles, the CAD
+    object map; opens from the file system (three.js inline, no network)."""
     from ..render import write_viewer  # lazy: CLI start-up (the render package)
 
     page = write_viewer(out_dir, output, max_points=max_points)

@@ -10,6 +10,10 @@ otherwise.
 Readers return a :class:`~ontodetect.cloud.PointCloud`; on any problem with the
 file they raise a :class:`~ontodetect.errors.ReadError` subclass whose message
 names the file and the problem.
+
+Beside point clouds: photographs of a scene as grey levels (:func:`read_image`,
+:func:`image_files`) and fitted models as numeric arrays with a JSON header, never
+pickled (:func:`write_array_archive`, :func:`read_array_archive`).
 """
 
 from __future__ import annotations
@@ -23,6 +27,7 @@ from typing import Any
 
 from ..cloud import PointCloud
 from ..errors import ReadError, UnsupportedFormatError, WriteError
+from ._arrays import read_array_archive, write_array_archive
 from ._atomic import (
     RUN_MARKER,
     atomic_write,
@@ -46,6 +51,7 @@ from ._exports import (
     write_box_table,
     write_scannet_instances,
 )
+from ._image import image_files, read_image
 from ._inputs import expand_inputs as _expand_inputs
 from ._layouts import DATASET_FORMATS
 from ._textfile import regular_file
@@ -66,14 +72,18 @@ __all__ = [
     "detections_schema",
     "expand_inputs",
     "export_detections",
+    "image_files",
     "make_folder",
+    "read_array_archive",
     "read_box_table",
     "read_cloud",
     "read_detections",
+    "read_image",
     "read_scannet_instances",
     "staged_folder",
     "supported_formats",
     "validate_detections",
+    "write_array_archive",
     "write_box_table",
     "write_cloud",
     "write_detections",

@@ -12,7 +12,19 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._progress import progress
-from .._units import estimate_spacing, guess_units
+from .._units import guess_units
+from .._up import (
+    AUTO_FRAME,
+    CAMERA_MAX_TILT,
+    CELL_PER_SPACING,
+    FULL_CELL_PERCENTILE,
+    MIN_SURFACE_CELLS,
+    SPACING_SAMPLE,
+    SURFACE_CELL,
+    default_up,
+    surface_spacing,
+    up_hint,
+)
 from ..cloud import PointCloud, point_cloud
 from ..config import Config
 from ..errors import InvalidParameterError
@@ -34,6 +46,7 @@ from ._surface import smooth_surface
 from ._voxel import VoxelGrid, voxelize
 
 __all__ = [
+    "AUTO_FRAME",
     "CAMERA_MAX_TILT",
     "CELL_PER_SPACING",
     "DENOISE_GRID_FACTOR",
@@ -61,14 +74,9 @@ __all__ = [
 MILLIMETRE = 1e-3
 #: Scale applied to clouds whose size says centimetres.
 CENTIMETRE = 1e-2
-#: Voxel centres sampled to estimate the sampling spacing.
-SPACING_SAMPLE = 20_000
 #: A rotation closer to the identity than this (Frobenius norm) is no rotation: the grid
 #: computed before levelling is reused.
 IDENTITY_TOLERANCE = 1e-12
-#: Cells of the coarse plane fits hold about this many sampling spacings a side, so that
-#: sparse scans still get a few points per cell.
-CELL_PER_SPACING = 5.0
 #: Outliers are sought on a grid this many times coarser than the voxels: a speck of noise
 #: is as isolated there, and the neighbour search costs a quarter.
 DENOISE_GRID_FACTOR = 2.0
@@ -77,14 +85,6 @@ DENOISE_GRID_FACTOR = 2.0
 LEVEL_MIN_ANGLE = 0.2
 #: A floor height map flatter than this (m) is dropped: the floor is a plane.
 FLAT_FLOOR = 0.01
-#: Cell (m) on which the surface per voxel is measured, and how many planar cells that takes.
-SURFACE_CELL = 0.2
-MIN_SURFACE_CELLS = 20
-#: Planar cells this full (percentile of voxel counts) count as completely covered; edge
-#: cells of a surface are partly empty.
-FULL_CELL_PERCENTILE = 90.0
-#: Largest angle (deg) between a camera frame's -y axis and up that ``up="auto"`` considers.
-CAMERA_MAX_TILT = 60.0
 
 
 def scale_from_travel(encoder_distance: float, slam_distance: float) -> float:
@@ -248,51 +248,6 @@ class PreparedScene:
         }
 
 
-def surface_spacing(centers: ArrayLike, voxel_size: float) -> float:
-    """Side of the square of surface one voxel stands for (m): the scene's sampling spacing.
-
-    On well-covered planar patches of a coarse grid, ``cell² / voxels per cell``
-    is the surface per voxel. Nearest-neighbour distances underestimate it on
-    unevenly sampled scans (mesh vertices crowd at edges and leave flat parts
-    bare), and it is what turns surfaces (m²) into voxel counts. Never less than
-    the voxel size; the median nearest-neighbour distance when too few planar
-    cells exist.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> g = np.stack(np.meshgrid(np.arange(100), np.arange(100), [0]), -1).reshape(-1, 3)
-    >>> s = surface_spacing(g * 0.04, 0.02)  # a grid of 4 cm: about 4 cm
-    >>> bool(0.035 < s < 0.045)
-    True
-    """
-    c = np.asarray(centers, dtype=np.float64)
-    if len(c) < 2:
-        return float(voxel_size)
-    cells = cell_planes(c, SURFACE_CELL)
-    counts = cells.counts[cells.planar]
-    if len(counts) >= MIN_SURFACE_CELLS:
-        full = float(np.percentile(counts, FULL_CELL_PERCENTILE))
-        est = SURFACE_CELL / np.sqrt(full)
-    else:
-        sample = c[:: max(1, len(c) // SPACING_SAMPLE)]
-        est = estimate_spacing(c, sample=len(sample))
-    return float(max(voxel_size, est))
-
-
-class _Clock:
-    """Seconds spent in each step, for people tuning parameters on big scans."""
-
-    def __init__(self) -> None:
-        self.laps: dict[str, float] = {}
-        self._t = time.perf_counter()
-
-    def lap(self, name: str) -> None:
-        now = time.perf_counter()
-        self.laps[name] = round(now - self._t, 4)
-        self._t = now
-
-
 def _choose_scale(xyz, cfg, scale, travelled) -> tuple[float, str]:
     if scale is not None:
         if isinstance(scale, bool) or not isinstance(scale, (int, float)) or not scale > 0:
@@ -314,13 +269,17 @@ def _choose_scale(xyz, cfg, scale, travelled) -> tuple[float, str]:
     return 1.0, "default"
 
 
-def _up_hint(cloud: PointCloud) -> tuple[str, float | None]:
-    # An organized cloud (width x height) is a camera frame: y down, z forward, and a
-    # camera is pitched or rolled but not turned on its side.
-    height = cloud.meta.get("height")
-    if isinstance(height, (int, np.integer)) and height > 1:
-        return "-y", CAMERA_MAX_TILT
-    return "z", None
+class _Clock:
+    """Seconds spent in each step, for people tuning parameters on big scans."""
+
+    def __init__(self) -> None:
+        self.laps: dict[str, float] = {}
+        self._t = time.perf_counter()
+
+    def lap(self, name: str) -> None:
+        now = time.perf_counter()
+        self.laps[name] = round(now - self._t, 4)
+        self._t = now
 
 
 #: A scan whose centre lies farther than this from its origin (in its own units)...
@@ -463,10 +422,10 @@ def find_ground(
     # -- gravity and ground ------------------------------------------------------------
     spacing = surface_spacing(grid.centers, cfg.voxel_size)
     cell = max(cfg.structure_cell, CELL_PER_SPACING * spacing)
-    up_choice = cfg.up if up is None else up
+    up_choice = default_up(cloud, cfg.up if up is None else up)
     confidence = 1.0
     if isinstance(up_choice, str) and up_choice == "auto":
-        hint, max_angle = _up_hint(cloud)
+        hint, max_angle = up_hint(cloud)
         u, confidence = estimate_up(grid.centers, hint=hint, cell=cell, max_angle=max_angle)
     else:
         u = as_direction(up_choice)

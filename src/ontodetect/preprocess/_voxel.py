@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._up import grouped_covariance
 from ..config import POSITIVE, check_param
 from ..errors import InvalidParameterError
 from ..geometry import as_points
@@ -217,37 +218,3 @@ def voxelize(
     return VoxelGrid(
         float(size), org, ukeys, centers, mean_colors, counts.astype(np.int64), point_to_voxel
     )
-
-
-def grouped_covariance(
-    points: NDArray[np.float64], groups: NDArray[np.int64], num_groups: int
-) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
-    """Mean and covariance of the points of every group, in one pass of sums.
-
-    Parameters
-    ----------
-    points : (n, 3) float
-    groups : (n,) int
-        Group of every point, in ``0..num_groups-1``.
-    num_groups : int
-
-    Returns
-    -------
-    means : (g, 3) float
-    covariances : (g, 3, 3) float
-    counts : (g,) int
-    """
-    counts = np.bincount(groups, minlength=num_groups)
-    safe = np.maximum(counts, 1)[:, None]
-    means = np.stack([np.bincount(groups, points[:, a], num_groups) for a in range(3)], 1)
-    means /= safe
-    # Centre on the group mean before the products: sums of raw squares lose precision
-    # far from the origin.
-    d = points - means[groups]
-    cov = np.empty((num_groups, 3, 3))
-    for a in range(3):
-        for b in range(a, 3):
-            v = np.bincount(groups, d[:, a] * d[:, b], num_groups) / safe[:, 0]
-            cov[:, a, b] = v
-            cov[:, b, a] = v
-    return means, cov, counts
