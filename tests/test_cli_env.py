@@ -11,6 +11,7 @@ import pytest
 
 from _images import TEXTURES, write_training_folder
 from ontodetect.cli import main
+from ontodetect.environment import combine_room_priors
 from ontodetect.ontology import room_distribution
 from ontodetect.ontology._environment import room_table
 from ontodetect.synth import synthesize, write_synth
@@ -81,7 +82,8 @@ def test_detect_takes_the_room_prior_from_photographs(trained, scan, tmp_path, c
     _, model, scene = trained
     out = tmp_path / "out"
     args = ["-q", "detect", str(scan), "-o", str(out), "--votes", "1", "--no-picture"]
-    assert main([*args, "--scene-image", str(scene), "--env-model", str(model)]) == 0
+    images = ["--scene-image", str(scene), "--env-model", str(model)]
+    assert main([*args, *images, "--room", "none"]) == 0
     assert main(["env", "predict", str(scene), "--model", str(model), "--json"]) == 0
     rooms = json.loads(capsys.readouterr().out)["rooms"]
     seating = room_table("seating")
@@ -94,6 +96,16 @@ def test_detect_takes_the_room_prior_from_photographs(trained, scan, tmp_path, c
     assert main([*args[:4], str(tmp_path / "o2"), *args[5:], "--room-probs", str(probs)]) == 0
     again = json.loads((tmp_path / "o2" / "detections.json").read_text())
     assert again["priors"] == doc["priors"]
+    assert doc["environment"]["source"] == "images"
+    # by default the photographs' P_N meets the scan's own estimate
+    assert main([*args[:4], str(tmp_path / "o3"), *args[5:], *images]) == 0
+    both = json.loads((tmp_path / "o3" / "detections.json").read_text())["environment"]
+    assert both["source"] == "scan+images"
+    assert main([*args[:4], str(tmp_path / "o4"), *args[5:]]) == 0
+    scan_only = json.loads((tmp_path / "o4" / "detections.json").read_text())["environment"]
+    assert scan_only["source"] == "scan"
+    expected = combine_room_priors(scan_only["rooms"], room_distribution(rooms))
+    assert both["rooms"] == pytest.approx({k: expected[k] for k in both["rooms"]}, abs=2e-3)
 
 
 def _garbage_image(folder):

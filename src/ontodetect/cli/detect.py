@@ -172,7 +172,7 @@ def detect(
     )
     onto = load_ontology_option(ontology, ontology_only)
     room_arg = room_option(room, room_probs)
-    room_arg = scene_image_room(scene_image, env_model, room, room_probs) or room_arg
+    scene_rooms = scene_image_room(scene_image, env_model, room, room_probs)
     eye = number_list(viewpoint, float, "--viewpoint")
     if eye is not None:
         eye = as_position(eye, "--viewpoint")
@@ -193,6 +193,7 @@ def detect(
                 "indoor": indoor,
                 "seed": seed,
                 "viewpoint": eye,
+                "scene_rooms": scene_rooms,
             },
             picture=picture,
             labelled_format=labelled_format.lower(),
@@ -210,6 +211,7 @@ def detect(
             indoor=indoor,
             seed=seed,
             viewpoint=eye,
+            scene_rooms=scene_rooms,
         )
         object_map = None
         if cad:

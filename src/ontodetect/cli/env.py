@@ -108,8 +108,10 @@ def scene_image_room(
     room: str | None,
     room_probs: Path | None,
 ) -> dict[str, float] | None:
-    """``detect --scene-image IMAGE_OR_DIR --env-model MODEL``: P_N from the photographs,
-    passed on as ``--room-probs`` would be; None when neither option is given."""
+    """``detect --scene-image IMAGE_OR_DIR --env-model MODEL``: P_N from the photographs
+    (None when neither option is given). With ``--room auto`` (the default) it is combined
+    with the scan's own estimate; with ``--room none`` it is the prior alone, as
+    ``--room-probs`` would be."""
     if scene_image is None and env_model is None:
         return None
     if scene_image is None or env_model is None:
@@ -119,8 +121,9 @@ def scene_image_room(
             else ("--env-model", "--scene-image")
         )
         raise InvalidParameterError(given, f"given with {missing}", "without it")
-    if room is not None or room_probs is not None:
-        other = "--room" if room is not None else "--room-probs"
+    named = room is not None and room.strip().lower() not in ("auto", "none")
+    if named or room_probs is not None:
+        other = "--room" if named else "--room-probs"
         raise InvalidParameterError(
             "--scene-image",
             f"not combined with {other} (both set the room prior)",
