@@ -87,3 +87,24 @@ def test_classes_all_reports_the_competing_classes():
     assert found & {"toilet", "sink"}, found
     default = detect(cloud, config=Config().with_overrides(["detect.votes=1"]), room=None)
     assert {d.label for d in default.detections} <= {"chair", "sofa", "table"}
+
+
+def test_cli_classes_all_and_a_bad_class_name(tmp_path, capsys):
+    import json
+
+    from ontodetect.cli import main
+    from ontodetect.io import write_cloud
+
+    cloud, _ = object_scene(
+        ["toilet", make_furniture("sink-pedestal", 0, backsplash=True)], points=30_000, seed=0
+    )
+    path = tmp_path / "wc.ply"
+    write_cloud(path, cloud)
+    args = ["-q", "detect", str(path), "--votes", "1", "--no-picture", "--json"]
+    assert main([*args, "-o", str(tmp_path / "all"), "--classes", "all"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert {d["label"] for d in doc["detections"]} & {"toilet", "sink"}
+    assert doc["environment"]["source"] == "scan"
+    assert main([*args, "-o", str(tmp_path / "bad"), "--classes", "chair,spaceship"]) == 2
+    err = capsys.readouterr().err
+    assert "detect.classes" in err and "spaceship" in err and len(err.strip().splitlines()) == 1
