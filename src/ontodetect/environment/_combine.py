@@ -63,7 +63,7 @@ def combine_room_priors(
     >>> both = combine_room_priors({"office": 0.6, "living_room": 0.4},
     ...                            {"office": 0.9, "kitchen": 0.1})
     >>> [(c, round(p, 3)) for c, p in list(both.items())[:2]]
-    [('office', 0.998), ('living_room', 0.002)]
+    [('office', 0.998), ('living_room', 0.001)]
 
     They disagree, each sure of itself: neither zero vetoes the other.
 

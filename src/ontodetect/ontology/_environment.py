@@ -138,8 +138,9 @@ def rooms_from_objects(
 ) -> dict[str, float]:
     """P_N from the objects a first labelling found, every class competing.
 
-    Each object found is evidence about the room, weighed by what it may be: its
-    probabilities ``p_c`` over the classes (and "none") from the scoring. A class makes a
+    Each object found is evidence about the room, weighed by how sure the labelling is of
+    it: ``{class: p}`` (the class it was labelled with and its probability; several classes
+    may be given, with "none" taking the rest). A class makes a
     category more likely by the ratio ``r_c(N) = P(c | N) / mean_N' P(c | N')`` of its
     table (Table 4.10 for seating): how much more often such a thing stands in a room of
     that category than in any room. The object's factor is the expected ratio,

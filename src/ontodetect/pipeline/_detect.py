@@ -236,13 +236,15 @@ def _environment_given(
 def _found_objects(
     choices: Sequence[LabelChoice], scores: Sequence[ClusterScores]
 ) -> list[dict[str, float]]:
-    """What a labelling found, every class competing: each labelled cluster's
-    probabilities over the classes and "none"."""
-    return [
-        dict(score.probabilities)
-        for choice, score in zip(choices, scores)
-        if choice.extra.get("class") is not None
-    ]
+    """What a labelling found, every class competing: for each labelled cluster, the class
+    it was labelled with and that class's probability. (Not the whole posterior: a dozen
+    chairs that each look a little like a WC are a dozen chairs, not a bathroom.)"""
+    out = []
+    for choice, score in zip(choices, scores):
+        name = choice.extra.get("class")
+        if name is not None:
+            out.append({name: float(score.probabilities.get(name, 0.0))})
+    return out
 
 
 def _recognition_result(
