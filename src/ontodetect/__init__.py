@@ -42,10 +42,12 @@ __all__ = [
     "PointCloud",
     "ReadError",
     "Result",
+    "TiledResult",
     "UnsupportedFormatError",
     "WriteError",
     "__version__",
     "detect",
+    "detect_tiled",
     "point_cloud",
     "read_cloud",
     "write_cloud",
@@ -53,7 +55,7 @@ __all__ = [
 
 #: Names re-exported from ``pipeline``, imported when first used: ``import ontodetect``
 #: stays light (the CLI's start-up), ``from ontodetect import detect`` works.
-_FROM_PIPELINE = ("Detection", "Result", "detect")
+_FROM_PIPELINE = ("Detection", "Result", "TiledResult", "detect", "detect_tiled")
 
 
 def __getattr__(name: str):
