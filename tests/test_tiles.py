@@ -100,6 +100,22 @@ def test_a_survey_bounds_counts_and_subsamples_in_one_pass(tmp_path, cloud):
     np.testing.assert_array_equal(survey.hi, whole.xyz.max(axis=0))
 
 
+@pytest.mark.parametrize("suffix", [".ply", ".laz"])
+def test_a_window_steps_over_the_chunks_that_miss_it(tmp_path, cloud, suffix):
+    # Rows sorted along x, as a file written room by room is: chunks are narrow in x.
+    path = write_cloud(tmp_path / f"c{suffix}", cloud.select(np.argsort(cloud.xyz[:, 0])))
+    survey = survey_cloud(path, chunk_points=500)
+    assert survey.chunk_bounds.shape == (10, 2, 3)
+    misses = XY.misses(survey.chunk_bounds)
+    assert 4 <= misses.sum() < 10  # x in [1, 2) is a quarter of [0, 4)
+    starts = [c.start for c in iter_chunks(path, chunk_points=500, skip=lambda k: misses[k])]
+    assert starts == [500 * k for k in np.flatnonzero(~misses)]
+    fast = read_window(path, XY, chunk_points=500, chunk_bounds=survey.chunk_bounds)
+    slow = read_window(path, XY, chunk_points=500)
+    assert fast.index.tolist() == slow.index.tolist()
+    np.testing.assert_array_equal(fast.xyz, slow.xyz)
+
+
 def test_a_window_of_nothing_and_a_truncated_file(tmp_path, cloud):
     path = write_cloud(tmp_path / "c.ply", cloud)
     far = Window(np.eye(3)[:2], np.array([50.0, 50.0]), np.array([60.0, 60.0]))

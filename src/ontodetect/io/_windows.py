@@ -17,7 +17,7 @@ shifts them to 8 bits unless every colour of the window is at most 255, as
 from __future__ import annotations
 
 import contextlib
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -78,6 +78,21 @@ class Window:
         uv = np.asarray(xyz, dtype=np.float64) @ self.axes.T
         return np.all((uv >= self.lo) & (uv < self.hi), axis=1)
 
+    def misses(self, boxes: ArrayLike) -> NDArray[np.bool_]:
+        """(k,) bool: which boxes (k, 2, 3) (low and high corners; NaN: empty) surely hold
+        no point of the window (their corners' span on the axes does not meet it)."""
+        boxes = np.asarray(boxes, dtype=np.float64)
+        corners = np.stack(
+            [boxes[:, [i, j, m], [0, 1, 2]] for i in (0, 1) for j in (0, 1) for m in (0, 1)],
+            axis=1,
+        )  # (k, 8, 3)
+        uv = corners @ self.axes.T
+        with np.errstate(invalid="ignore"):
+            empty = np.isnan(boxes).any(axis=(1, 2))
+            low, high = uv.min(axis=1), uv.max(axis=1)
+            apart = np.any((high < self.lo) | (low >= self.hi), axis=1)
+        return empty | apart
+
 
 def _format(path: Path, format: str | None) -> str:
     from . import detect_format  # lazy: the registry imports this module's readers by name
@@ -86,12 +101,18 @@ def _format(path: Path, format: str | None) -> str:
 
 
 def iter_chunks(
-    path: str | Path, *, format: str | None = None, chunk_points: int = WINDOW_CHUNK_POINTS
+    path: str | Path,
+    *,
+    format: str | None = None,
+    chunk_points: int = WINDOW_CHUNK_POINTS,
+    skip: Callable[[int], bool] | None = None,
 ) -> Iterator[Chunk]:
     """The rows of a point cloud file, ``chunk_points`` at a time, in file order.
 
     Binary PLY and LAS/LAZ are decoded one chunk at a time; any other format is read
-    whole (:func:`~ontodetect.io.read_cloud`) and handed out in slices.
+    whole (:func:`~ontodetect.io.read_cloud`) and handed out in slices. Chunk number k
+    (rows ``k * chunk_points`` on) is stepped over without being decoded when
+    ``skip(k)`` is true (binary PLY and LAS/LAZ; other formats hand out every chunk).
 
     Raises
     ------
@@ -103,12 +124,12 @@ def iter_chunks(
         raise InvalidParameterError("chunk_points", "a whole number >= 1", chunk_points)
     fmt = _format(path, format)
     if fmt == "ply":
-        chunks = _ply_chunks(path, chunk_points)
+        chunks = _ply_chunks(path, chunk_points, skip)
         if chunks is not None:
             yield from chunks
             return
     elif fmt == "las":
-        yield from _las_chunks(path, chunk_points)
+        yield from _las_chunks(path, chunk_points, skip)
         return
     yield from _whole_chunks(path, fmt, chunk_points)
 
@@ -139,7 +160,7 @@ def _whole_chunks(path: Path, fmt: str, chunk_points: int) -> Iterator[Chunk]:
         )
 
 
-def _ply_chunks(path: Path, chunk_points: int) -> Iterator[Chunk] | None:
+def _ply_chunks(path: Path, chunk_points: int, skip) -> Iterator[Chunk] | None:
     """Chunks of a binary PLY whose vertices are fixed-size rows; None for any other."""
     header = _read_header(path)
     vertex = next((e for e in header.elements if e.name == "vertex"), None)
@@ -164,10 +185,10 @@ def _ply_chunks(path: Path, chunk_points: int) -> Iterator[Chunk] | None:
             f"truncated: the header declares {count} vertices ({count * record.itemsize} "
             f"bytes from byte {offset}) but the file holds only {max(size - offset, 0)} bytes",
         )
-    return _record_chunks(path, offset, record, count, plan, chunk_points)
+    return _record_chunks(path, offset, record, count, plan, chunk_points, skip)
 
 
-def _record_chunks(path, offset, record, count, plan, chunk_points) -> Iterator[Chunk]:
+def _record_chunks(path, offset, record, count, plan, chunk_points, skip) -> Iterator[Chunk]:
     """Rows read into a buffer of one chunk (not mapped: a mapped file's pages would
     count in the process's resident memory as it is read through)."""
     try:
@@ -175,9 +196,11 @@ def _record_chunks(path, offset, record, count, plan, chunk_points) -> Iterator[
     except OSError as exc:
         raise ReadError(path, f"cannot read ({exc.strerror or exc})") from exc
     with fh, np.errstate(invalid="ignore", over="ignore"):
-        fh.seek(offset)
-        for start in range(0, count, chunk_points):
+        for k, start in enumerate(range(0, count, chunk_points)):
+            if skip is not None and skip(k):
+                continue
             m = min(chunk_points, count - start)
+            fh.seek(offset + start * record.itemsize)
             try:
                 part = np.fromfile(fh, dtype=record, count=m)
             except OSError as exc:
@@ -202,7 +225,7 @@ def _record_chunks(path, offset, record, count, plan, chunk_points) -> Iterator[
             yield Chunk(start, xyz, rgb, normals)
 
 
-def _las_chunks(path: Path, chunk_points: int) -> Iterator[Chunk]:
+def _las_chunks(path: Path, chunk_points: int, skip) -> Iterator[Chunk]:
     laspy = _laspy()
     errors = _laspy_errors()
     _check_header(path, file_size(path))
@@ -219,24 +242,34 @@ def _las_chunks(path: Path, chunk_points: int) -> Iterator[Chunk]:
         if count <= 0:
             raise CorruptFileError(path, "contains no points (the header says 0)")
         has_rgb = {"red", "green", "blue"} <= set(reader.header.point_format.dimension_names)
-        start = 0
+        position = 0  # the reader's next row
         with np.errstate(over="ignore", invalid="ignore"):
-            for chunk in reader.chunk_iterator(chunk_points):
-                n = min(len(chunk), count - start)
-                if n <= 0:
-                    break
+            for k, start in enumerate(range(0, count, chunk_points)):
+                if skip is not None and skip(k):
+                    continue
+                if position != start:
+                    reader.seek(start)  # over skipped chunks (LAZ: through its chunk table)
+                want = min(chunk_points, count - start)
+                chunk = reader.read_points(want)
+                n = len(chunk)
+                position = start + n
+                if n < want:
+                    raise CorruptFileError(
+                        path,
+                        f"truncated: the header says {count} points but only "
+                        f"{start + n} could be read",
+                    )
                 xyz = np.empty((n, 3), dtype=np.float64)
-                xyz[:, 0] = np.asarray(chunk.x, dtype=np.float64)[:n]
-                xyz[:, 1] = np.asarray(chunk.y, dtype=np.float64)[:n]
-                xyz[:, 2] = np.asarray(chunk.z, dtype=np.float64)[:n]
+                xyz[:, 0] = np.asarray(chunk.x, dtype=np.float64)
+                xyz[:, 1] = np.asarray(chunk.y, dtype=np.float64)
+                xyz[:, 2] = np.asarray(chunk.z, dtype=np.float64)
                 rgb = None
                 if has_rgb:
                     rgb = np.empty((n, 3), dtype=np.uint16)
-                    rgb[:, 0] = np.asarray(chunk.red)[:n]
-                    rgb[:, 1] = np.asarray(chunk.green)[:n]
-                    rgb[:, 2] = np.asarray(chunk.blue)[:n]
+                    rgb[:, 0] = np.asarray(chunk.red)
+                    rgb[:, 1] = np.asarray(chunk.green)
+                    rgb[:, 2] = np.asarray(chunk.blue)
                 yield Chunk(start, xyz, rgb, None)
-                start += n
     except (CorruptFileError, GeneratorExit):
         raise
     except BaseException as exc:
@@ -246,10 +279,6 @@ def _las_chunks(path: Path, chunk_points: int) -> Iterator[Chunk]:
     finally:
         with contextlib.suppress(*errors):
             reader.close()
-    if start != count:
-        raise CorruptFileError(
-            path, f"truncated: the header says {count} points but only {start} could be read"
-        )
 
 
 @dataclass(frozen=True)
@@ -265,6 +294,11 @@ class CloudSurvey:
     sample : PointCloud
         Every ``step``-th row (``index``: its rows in the file).
     step : int
+    chunk_points : int
+        Rows of a chunk.
+    chunk_bounds : (k, 2, 3) float
+        Low and high corner of every chunk's finite coordinates (NaN for a chunk without
+        one): a window read steps over the chunks whose box misses it.
     """
 
     num_points: int
@@ -272,6 +306,8 @@ class CloudSurvey:
     hi: NDArray[np.float64]
     sample: PointCloud
     step: int
+    chunk_points: int = WINDOW_CHUNK_POINTS
+    chunk_bounds: NDArray[np.float64] | None = None
 
 
 def survey_cloud(
@@ -295,13 +331,22 @@ def survey_cloud(
     hi = np.full(3, -np.inf)
     parts: list[Chunk] = []
     rows: list[NDArray[np.int64]] = []
+    boxes: list[NDArray[np.float64]] = []
     n = 0
     for chunk in iter_chunks(path, format=format, chunk_points=chunk_points):
         m = len(chunk.xyz)
         finite = np.isfinite(chunk.xyz).all(axis=1)
+        box = np.full((2, 3), np.nan)
         if finite.any():
-            lo = np.minimum(lo, chunk.xyz[finite].min(axis=0))
-            hi = np.maximum(hi, chunk.xyz[finite].max(axis=0))
+            box = np.array([chunk.xyz[finite].min(axis=0), chunk.xyz[finite].max(axis=0)])
+            lo = np.minimum(lo, box[0])
+            hi = np.maximum(hi, box[1])
+        k = chunk.start // chunk_points
+        boxes.extend([np.full((2, 3), np.nan)] * (k - len(boxes)))  # (a reader's dropped rows)
+        if k < len(boxes):
+            boxes[k] = np.array([np.fmin(boxes[k][0], box[0]), np.fmax(boxes[k][1], box[1])])
+        else:
+            boxes.append(box)
         first = (-chunk.start) % step
         take = np.arange(first, m, step)
         take = take[finite[take]]
@@ -312,7 +357,7 @@ def survey_cloud(
     if not parts:
         raise CorruptFileError(path, "contains no points with finite coordinates")
     sample = _cloud(path, parts, np.concatenate(rows))
-    return CloudSurvey(n, lo, hi, sample, step)
+    return CloudSurvey(n, lo, hi, sample, step, chunk_points, np.array(boxes).reshape(-1, 2, 3))
 
 
 def _declared_count(path: Path, fmt: str) -> int:
@@ -337,17 +382,25 @@ def read_window(
     *,
     format: str | None = None,
     chunk_points: int = WINDOW_CHUNK_POINTS,
+    chunk_bounds: ArrayLike | None = None,
 ) -> PointCloud | None:
     """The points of a file inside ``window``, with their rows in the file as ``index``.
 
     Only one chunk of the file is decoded at a time (binary PLY, LAS/LAZ): the memory
-    a window takes is that of its own points, not the file's. None when no point lies
-    in the window.
+    a window takes is that of its own points, not the file's. With ``chunk_bounds``
+    (:attr:`CloudSurvey.chunk_bounds`, for the same ``chunk_points``) the chunks whose
+    box misses the window are not even decoded: a file written room by room, or sorted
+    along a path, is read only where the window is. None when no point lies in the
+    window.
     """
     path = Path(path)
     parts: list[Chunk] = []
     rows: list[NDArray[np.int64]] = []
-    for chunk in iter_chunks(path, format=format, chunk_points=chunk_points):
+    skip = None
+    if chunk_bounds is not None:
+        misses = window.misses(np.asarray(chunk_bounds, dtype=np.float64).reshape(-1, 2, 3))
+        skip = lambda k: k < len(misses) and bool(misses[k])  # noqa: E731
+    for chunk in iter_chunks(path, format=format, chunk_points=chunk_points, skip=skip):
         with np.errstate(invalid="ignore"):
             inside = np.flatnonzero(window.contains(chunk.xyz))
         if len(inside):

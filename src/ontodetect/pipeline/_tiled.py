@@ -231,6 +231,9 @@ class TileTask:
         Keyword arguments of :func:`detect` (``config``, ``ontology``, ``seed``...).
     chunk_points : int
         Rows read at a time.
+    chunk_bounds : (k, 2, 3) float, optional
+        Every chunk's box (:func:`~ontodetect.io._windows.survey_cloud`): chunks that miss
+        the window are not read.
     """
 
     tile: Tile
@@ -240,6 +243,7 @@ class TileTask:
     format: str | None = None
     options: Mapping[str, Any] = field(default_factory=dict)
     chunk_points: int = WINDOW_CHUNK_POINTS
+    chunk_bounds: NDArray[np.float64] | None = None
 
 
 @dataclass(frozen=True)
@@ -546,6 +550,7 @@ def detect_tiled(
         sample = cloud.select(np.arange(0, len(cloud), step))
         lo, hi = cloud.xyz.min(axis=0), cloud.xyz.max(axis=0)
         num_points = int(cloud.index.max()) + 1
+        bounds = None
         name = str(cloud.meta.get("source", ""))
     else:
         path = Path(source)
@@ -554,6 +559,7 @@ def detect_tiled(
         )
         sample, lo, hi = survey.sample, survey.lo, survey.hi
         num_points, name = survey.num_points, str(path)
+        bounds = survey.chunk_bounds
     plane = GroundPlane.from_ground(find_ground(sample, config))
     axes = floor_axes(plane.up)
     corners = np.array(np.meshgrid(*zip(lo, hi), indexing="ij")).reshape(3, -1).T @ axes.T
@@ -580,7 +586,9 @@ def detect_tiled(
             if not len(inside):
                 continue
             where = cloud.select(inside)
-        tasks.append(TileTask(t, axes, plane, where, format, options, chunk_points))
+        elif bounds is not None and t.window(axes).misses(bounds).all():
+            continue  # no chunk of the file reaches this tile
+        tasks.append(TileTask(t, axes, plane, where, format, options, chunk_points, bounds))
     t1 = time.perf_counter()
     outcomes = executor.map(
         detect_tile,
