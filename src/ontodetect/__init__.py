@@ -45,11 +45,13 @@ __all__ = [
     "PointCloud",
     "ReadError",
     "Result",
+    "TiledResult",
     "UnsupportedFormatError",
     "WriteError",
     "__version__",
     "combine_room_priors",
     "detect",
+    "detect_tiled",
     "point_cloud",
     "predict_environment",
     "read_cloud",
@@ -59,7 +61,7 @@ __all__ = [
 
 #: Names re-exported from ``pipeline``, imported when first used: ``import ontodetect``
 #: stays light (the CLI's start-up), ``from ontodetect import detect`` works.
-_FROM_PIPELINE = ("Detection", "Result", "detect")
+_FROM_PIPELINE = ("Detection", "Result", "TiledResult", "detect", "detect_tiled")
 #: Names re-exported from ``environment``, imported when first used (start-up, as above).
 _FROM_ENVIRONMENT = (
     "EnvironmentModel",

@@ -1,4 +1,8 @@
-"""Worker processes that start safely and soon."""
+"""Worker processes that start safely and soon, for the passes over one scan.
+
+Maps over many units of work (tiles, scans, scenes) go through
+:mod:`ontodetect._executor` instead.
+"""
 
 from __future__ import annotations
 
@@ -6,21 +10,7 @@ import multiprocessing
 import multiprocessing.context
 import os
 
-__all__ = ["cpu_count", "fork_context", "pool_context"]
-
-
-def pool_context() -> multiprocessing.context.BaseContext:
-    """The start method for worker pools: a fork server that has imported the pipeline.
-
-    Never a plain fork: the parent may hold threads (BLAS, Open3D) that a fork would copy
-    mid-lock. Workers fork from a server process that imported ``ontodetect.pipeline``
-    once, so they start in milliseconds; where there is no fork server, spawn.
-    """
-    if "forkserver" in multiprocessing.get_all_start_methods():
-        ctx = multiprocessing.get_context("forkserver")
-        ctx.set_forkserver_preload(["ontodetect.pipeline"])
-        return ctx
-    return multiprocessing.get_context("spawn")
+__all__ = ["cpu_count", "fork_context"]
 
 
 def fork_context() -> multiprocessing.context.BaseContext | None:

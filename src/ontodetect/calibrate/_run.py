@@ -11,6 +11,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from .._executor import Executor, executor_for
 from ..config import SHARE, check_param
 from ..errors import InvalidParameterError
 from ..evaluation._dataset import (
@@ -141,6 +142,7 @@ def calibrate_dataset(
     settings: FitSettings | None = None,
     evaluate: bool = True,
     scenes: Sequence[SceneSource] | None = None,
+    executor: Executor | None = None,
 ) -> CalibrationResult:
     """Calibrate an ontology on part of a labelled dataset; compare on the rest.
 
@@ -170,6 +172,9 @@ def calibrate_dataset(
         Detect on the held-out scenes with the base and the calibrated ontology.
     scenes : sequence of SceneSource, optional
         Use these instead of discovering ``path``'s scenes.
+    executor : Executor, optional
+        Where the scenes run (:func:`ontodetect._executor.open_executor`); by default one
+        opened for ``jobs`` and shared by the measuring and both evaluations.
 
     Returns
     -------
@@ -195,7 +200,21 @@ def calibrate_dataset(
         min_iou=min_iou,
         keep_clusters=settings.validate,
     )
-    samples = map_scenes(work, parts.calibration, jobs=jobs, description="Measuring objects")
+    with executor_for(executor, jobs if len(units) > 1 else 1) as pool:
+        return _calibrate(
+            path, text, source, base_onto, opts, parts, settings, work, evaluate, pool
+        )
+
+
+def _calibrate(path, text, source, base_onto, opts, parts, settings, work, evaluate, pool):
+    """:func:`calibrate_dataset` once the scenes are split, with its executor ``pool``."""
+    samples = map_scenes(
+        work,
+        parts.calibration,
+        description="Measuring objects",
+        executor=pool,
+        names=[u.name for u in parts.calibration],
+    )
     values: dict[ConstraintPath, list[float]] = {}
     rooms: dict[ConstraintPath, set[str]] = {}
     room_values: dict[str, dict[ConstraintPath, list[float]]] = {}
@@ -259,14 +278,14 @@ def calibrate_dataset(
     if evaluate and parts.held_out:
         before = evaluate_dataset(
             path,
-            jobs=jobs,
+            executor=pool,
             detect_options={**opts, "ontology": base_onto},
             scenes=parts.held_out,
             on_error="skip",
         )
         after = evaluate_dataset(
             path,
-            jobs=jobs,
+            executor=pool,
             detect_options={**opts, "ontology": new_onto},
             scenes=parts.held_out,
             on_error="skip",

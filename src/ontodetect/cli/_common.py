@@ -86,3 +86,29 @@ def number_list(text: str | None, kind: type, option: str) -> list | None:
     except ValueError:
         what = "integers" if kind is int else "numbers"
         raise InvalidParameterError(option, f"a comma-separated list of {what}", text) from None
+
+
+#: Help of the options that choose where batch work runs (shared by detect, eval, calibrate).
+SCHEDULER_HELP = (
+    "Run on the Dask cluster whose scheduler is at tcp://HOST:PORT (default: "
+    "$DASK_SCHEDULER_ADDRESS when set); every worker must see the input at the same path."
+)
+WORKERS_HELP = "Run on a local Dask cluster of N worker processes (one thread each)."
+
+
+def executor_option(scheduler: str | None, workers: int | None, jobs: int | None = None) -> Any:
+    """The executor ``--scheduler``, ``--workers`` or ``--jobs`` ask for (an open one: use
+    it in a ``with`` block); errors name the option."""
+    from .._executor import open_executor  # lazy: CLI start-up (Dask loads when asked for)
+
+    if scheduler is not None and workers is not None:
+        raise InvalidParameterError("--workers", "not combined with --scheduler", workers)
+    try:
+        return open_executor(scheduler, workers=workers, jobs=jobs)
+    except InvalidParameterError as exc:
+        option = {"scheduler": "--scheduler", "workers": "--workers", "jobs": "--jobs"}.get(
+            exc.name
+        )
+        if option is None:
+            raise
+        raise InvalidParameterError(option, exc.rule, exc.value) from None

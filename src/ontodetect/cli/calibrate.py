@@ -12,7 +12,7 @@ from rich.text import Text
 from ..io import atomic_write_text
 from ..io._layouts import DATASET_FORMATS
 from . import app
-from ._common import load_config
+from ._common import SCHEDULER_HELP, WORKERS_HELP, executor_option, load_config
 from ._console import console, err_console, reporting, state
 from ._defaults import (
     MIN_GAIN_ROOMS,
@@ -41,7 +41,13 @@ def calibrate(
     format: str = typer.Option(
         "auto", "--format", "-f", help=f"Dataset layout: {', '.join(DATASET_FORMATS)}."
     ),
-    jobs: int = typer.Option(1, "--jobs", "-j", help="Scenes in parallel (0: one per CPU)."),
+    jobs: int = typer.Option(
+        1, "--jobs", "-j", help="Scenes in parallel on a local cluster (0: one per CPU)."
+    ),
+    workers: int | None = typer.Option(None, "--workers", metavar="N", help=WORKERS_HELP),
+    scheduler: str | None = typer.Option(
+        None, "--scheduler", metavar="tcp://HOST:PORT", help=SCHEDULER_HELP
+    ),
     sigma_floor: float = typer.Option(
         PRIOR_SIGMA_SHARE,
         "--sigma-floor",
@@ -124,17 +130,17 @@ def calibrate(
         validate=validate,
         min_gain_rooms=min_gain_rooms,
     )
-    with reporting():
+    with reporting(), executor_option(scheduler, workers, jobs) as executor:
         result = calibrate_dataset(
             dataset,
             base=ontology,
             format=format,
             split=split,
             seed=seed,
-            jobs=jobs,
             detect_options=opts,
             evaluate=evaluate,
             settings=settings,
+            executor=executor,
         )
     atomic_write_text(out, result.text)
     if report is not None:

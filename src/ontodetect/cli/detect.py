@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import contextlib
 import functools
 import json
 from pathlib import Path
@@ -16,7 +15,15 @@ from ..errors import OntoDetectError
 from ..geometry import jsonable
 from ..io import expand_inputs, read_cloud
 from . import app
-from ._common import load_config, load_ontology_option, number_list, room_option
+from ._common import (
+    SCHEDULER_HELP,
+    WORKERS_HELP,
+    executor_option,
+    load_config,
+    load_ontology_option,
+    number_list,
+    room_option,
+)
 from ._console import console, reporting, showing_progress, state
 from .env import scene_image_room
 
@@ -30,7 +37,28 @@ def detect(
         "('scans/*.ply'); with more than one scan, each gets OUT/<name>/.",
     ),
     out: Path = typer.Option(..., "--out", "-o", help="Output folder."),
-    jobs: int = typer.Option(1, "--jobs", "-j", help="Scans in parallel (0: one per CPU)."),
+    jobs: int = typer.Option(
+        1, "--jobs", "-j", help="Scans in parallel on a local cluster (0: one per CPU)."
+    ),
+    tile: float | None = typer.Option(
+        None,
+        "--tile",
+        metavar="METRES",
+        help="Cut one large scan (a building floor) into tiles of this edge on the floor "
+        "plane and detect tile by tile; writes detections.json and the exports "
+        "(docs/cluster.md).",
+    ),
+    overlap: float | None = typer.Option(
+        None,
+        "--overlap",
+        metavar="METRES",
+        help="With --tile: how far each tile reads beyond its core (default 2.5, at least "
+        "half the longest object the ontology allows plus 0.5).",
+    ),
+    workers: int | None = typer.Option(None, "--workers", metavar="N", help=WORKERS_HELP),
+    scheduler: str | None = typer.Option(
+        None, "--scheduler", metavar="tcp://HOST:PORT", help=SCHEDULER_HELP
+    ),
     format: str | None = typer.Option(None, "--format", "-f", help="Force the input format."),
     config: Path | None = typer.Option(None, "--config", "-c", help="Configuration YAML."),
     set_: list[str] = typer.Option(
@@ -177,13 +205,38 @@ def detect(
     if eye is not None:
         eye = as_position(eye, "--viewpoint")
     inputs = expand_inputs(paths)
+    if tile is not None:
+        if len(inputs) > 1 or cad or explain_ is not None:
+            raise typer.BadParameter(
+                "takes one scan, without --cad and --explain", param_hint="--tile"
+            )
+        _detect_tiled(
+            inputs[0],
+            out,
+            tile=tile,
+            overlap=overlap,
+            executor=(scheduler, workers, jobs),
+            as_json=as_json,
+            format=format,
+            exports=exports,
+            detect_options={
+                "config": cfg,
+                "ontology": onto,
+                "room": room_arg,
+                "indoor": indoor,
+                "seed": seed,
+            },
+        )
+        return
+    if overlap is not None:
+        raise typer.BadParameter("needs --tile", param_hint="--overlap")
     if len(inputs) > 1 or inputs[0] not in paths:
         if cad or explain_ is not None:
             raise typer.BadParameter("--cad and --explain take one scan", param_hint="INPUT...")
         _detect_many(
             inputs,
             out,
-            jobs=jobs,
+            executor=(scheduler, workers, jobs),
             as_json=as_json,
             format=format,
             detect_options={
@@ -321,18 +374,23 @@ def _detect_unit(
     }
 
 
-def _detect_many(inputs, out, *, jobs, as_json, format, detect_options, **write_options):
+def _detect_many(inputs, out, *, executor, as_json, format, detect_options, **write_options):
+    from .._executor import InProcess  # lazy: CLI start-up
     from ..evaluation import map_scenes  # lazy: CLI start-up
 
     units = [(p, out / name) for p, name in zip(inputs, _scan_names(inputs))]
-    fn = functools.partial(
-        _detect_unit, format=format, detect_options=detect_options, write_options=write_options
-    )
-    if not showing_progress():
-        with reporting():
-            rows = map_scenes(fn, units, jobs=jobs, description="Scans")
-    else:
-        rows = _detect_with_rows(fn, units, jobs)
+    with executor_option(*executor) as pool:
+        if not isinstance(pool, InProcess):
+            detect_options = {**detect_options, "jobs": 1}  # the scans use the CPUs
+        fn = functools.partial(
+            _detect_unit, format=format, detect_options=detect_options, write_options=write_options
+        )
+        names = [str(p) for p in inputs]
+        if showing_progress():
+            rows = _detect_with_rows(fn, units, pool, names)
+        else:
+            with reporting():
+                rows = map_scenes(fn, units, description="Scans", executor=pool, names=names)
     failed = [r for r in rows if "error" in r]
     if as_json:
         typer.echo(json.dumps(rows))
@@ -349,25 +407,57 @@ def _detect_many(inputs, out, *, jobs, as_json, format, detect_options, **write_
         raise typer.Exit(2)
 
 
-def _detect_with_rows(fn, units, jobs) -> list[dict]:
-    """``map_scenes`` with a progress row per scan in flight (its stage) and an overall row."""
-    import queue
-
-    from .._parallel import pool_context  # lazy: CLI start-up
+def _detect_with_rows(fn, units, pool, names) -> list[dict]:
+    """``map_scenes`` with a progress row per scan in flight (its stage) and an overall row;
+    the scans send their stages through the executor's channel."""
     from .._progress import use_reporter  # lazy: CLI start-up
     from ..evaluation import map_scenes  # lazy: CLI start-up
     from ._scans import scan_rows  # lazy: only with progress rows
 
-    with contextlib.ExitStack() as stack:
-        if jobs != 1 and len(units) > 1:  # worker processes (0: one per CPU)
-            channel = stack.enter_context(pool_context().Manager()).Queue()
-        else:
-            channel = queue.SimpleQueue()
-        shown = stack.enter_context(scan_rows(channel))
-        stack.enter_context(use_reporter(shown))
+    channel = pool.channel()
+    with scan_rows(channel) as shown, use_reporter(shown):
         return map_scenes(
-            functools.partial(fn, stages=channel), units, jobs=jobs, description="Scans"
+            functools.partial(fn, stages=channel),
+            units,
+            description="Scans",
+            executor=pool,
+            names=names,
         )
+
+
+def _detect_tiled(path, out, *, tile, overlap, executor, as_json, format, exports, detect_options):
+    """``detect --tile``: one large scan tile by tile; detections.json and the exports."""
+    from ..io import export_detections, make_folder, write_detections  # lazy: CLI start-up
+    from ..pipeline import detect_tiled  # lazy: CLI start-up
+
+    with reporting(), executor_option(*executor) as pool:
+        result = detect_tiled(
+            path, tile=tile, overlap=overlap, executor=pool, format=format, **detect_options
+        )
+    doc = result.to_dict()
+    make_folder(out)
+    written = [write_detections(out / "detections.json", doc)]
+    written += export_detections(out, doc, exports)
+    if as_json:
+        doc["files"] = [str(p) for p in written]
+        typer.echo(json.dumps(jsonable(doc)))
+        return
+    if state.quiet:
+        return
+    seconds = sum(result.timings.values())
+    console.print(
+        f"{path.name}: {len(result.detections)} objects in {len(result.tiles)} tiles "
+        f"({result.merged} duplicates merged), {result.num_points:,} points in {seconds:.1f} s "
+        f"on {result.workers} worker{'s' if result.workers != 1 else ''} "
+        f"({result.num_points / max(seconds, 1e-9):,.0f} points/s), "
+        f"peak memory of a worker {result.peak_rss / 2**20:,.0f} MiB"
+    )
+    by_label: dict[str, int] = {}
+    for d in result.detections:
+        by_label[d.label] = by_label.get(d.label, 0) + 1
+    if by_label:
+        console.print(", ".join(f"{n} {label}" for label, n in sorted(by_label.items())))
+    console.print("wrote " + ", ".join(str(p) for p in written))
 
 
 def _print_explain(rows) -> None:

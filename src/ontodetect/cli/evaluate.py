@@ -11,7 +11,15 @@ from rich.text import Text
 
 from ..io._layouts import DATASET_FORMATS
 from . import app
-from ._common import load_config, load_ontology_option, number_list, room_option
+from ._common import (
+    SCHEDULER_HELP,
+    WORKERS_HELP,
+    executor_option,
+    load_config,
+    load_ontology_option,
+    number_list,
+    room_option,
+)
 from ._console import console, reporting, state
 
 
@@ -41,7 +49,13 @@ def eval_(
         "--save-detections",
         help="Also write REPORT_DIR/detections/<scene>/detections.json (usable with --detections).",
     ),
-    jobs: int = typer.Option(1, "--jobs", "-j", help="Scenes in parallel (0: one per CPU)."),
+    jobs: int = typer.Option(
+        1, "--jobs", "-j", help="Scenes in parallel on a local cluster (0: one per CPU)."
+    ),
+    workers: int | None = typer.Option(None, "--workers", metavar="N", help=WORKERS_HELP),
+    scheduler: str | None = typer.Option(
+        None, "--scheduler", metavar="tcp://HOST:PORT", help=SCHEDULER_HELP
+    ),
     skip_failed: bool = typer.Option(
         False, "--skip-failed", help="Leave out scenes that cannot be read, and list them."
     ),
@@ -138,17 +152,17 @@ def eval_(
     if save_detections and out is None:
         raise typer.BadParameter("needs --out REPORT_DIR", param_hint="--save-detections")
     save_dir = out / "detections" if (save_detections and out is not None) else None
-    with reporting():
+    with reporting(), executor_option(scheduler, workers, jobs) as executor:
         result = evaluate_dataset(
             dataset,
             format=format,
-            jobs=jobs,
             detect_options=opts,
             detections_dir=detections,
             save_detections=save_dir,
             on_error="skip" if skip_failed else "raise",
             turns=turn_list,
             seeds=seed_list,
+            executor=executor,
         )
         files = write_report(result, out) if out is not None else None
     if as_json:

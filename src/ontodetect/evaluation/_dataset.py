@@ -14,8 +14,9 @@ Each scene is an independent unit of work: :func:`evaluate_scene` reads it, runs
 :func:`ontodetect.pipeline.detect` (or reads stored detections) and returns a
 :class:`SceneOutcome`; :func:`summarize_outcomes` merges the outcomes in scene order into a
 :class:`DatasetEvaluation`. :func:`evaluate_dataset` is that map and merge, run in worker
-processes with ``jobs > 1``; any other engine that maps a function over a list can run it
-the same way (docs/architecture.md, "Scale").
+processes with ``jobs > 1`` or on a Dask cluster (an :class:`~ontodetect._executor.Executor`:
+docs/cluster.md); any other engine that maps a function over a list can run it the same way
+(docs/architecture.md, "Scale").
 """
 
 from __future__ import annotations
@@ -27,14 +28,14 @@ import math
 import os
 import time
 from collections.abc import Callable, Mapping, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TypeVar
 
 import numpy as np
 
-from .._parallel import cpu_count, pool_context
+from .._executor import Executor, InProcess, executor_for
+from .._parallel import cpu_count
 from .._progress import progress
 from ..cloud import PointCloud, sensor_position
 from ..config import COUNT, Config, Interval, check_param
@@ -548,28 +549,36 @@ def _check_jobs(jobs: int) -> int:
 
 
 def map_scenes(
-    fn: Callable[[T], R], units: Sequence[T], *, jobs: int = 1, description: str = "Scenes"
+    fn: Callable[[T], R],
+    units: Sequence[T],
+    *,
+    jobs: int = 1,
+    description: str = "Scenes",
+    executor: Executor | None = None,
+    names: Sequence[str] | None = None,
 ) -> list[R]:
-    """``[fn(u) for u in units]``, in worker processes when ``jobs > 1``, results in order.
+    """``[fn(u) for u in units]``, results in order: in this process, or through
+    ``executor`` (a Dask cluster: :func:`ontodetect._executor.open_executor`), or on a
+    local cluster of ``jobs`` workers when ``jobs > 1``.
 
     ``fn`` and the units must be picklable (a module-level function or a
-    :func:`functools.partial` of one). A progress bar counts finished units.
+    :func:`functools.partial` of one). A progress bar counts finished units. A unit that
+    still fails after its retries ends the map with a
+    :class:`~ontodetect._executor.UnitsFailedError` naming it (``names``: what to call
+    each unit; default its position).
     """
+    if executor is not None:
+        return executor.map(fn, units, names=names, description=description)
     jobs = _check_jobs(jobs)
     results: list[Any] = [None] * len(units)
-    with progress(description, total=len(units)) as advance:
-        if jobs == 1 or len(units) <= 1:
+    if jobs == 1 or len(units) <= 1:
+        with progress(description, total=len(units)) as advance:
             for i, unit in enumerate(units):
                 results[i] = fn(unit)
                 advance(1)
-            return results
-        workers = min(jobs, len(units))
-        with ProcessPoolExecutor(max_workers=workers, mp_context=pool_context()) as pool:
-            futures = {pool.submit(fn, unit): i for i, unit in enumerate(units)}
-            for fut in as_completed(futures):
-                results[futures[fut]] = fut.result()
-                advance(1)
-    return results
+        return results
+    with executor_for(None, min(jobs, len(units))) as pool:
+        return pool.map(fn, units, names=names, description=description)
 
 
 # -- the dataset ---------------------------------------------------------------------------
@@ -756,6 +765,7 @@ def evaluate_dataset(
     scenes: Sequence[SceneSource] | None = None,
     turns: Sequence[float] | None = None,
     seeds: Sequence[int] | None = None,
+    executor: Executor | None = None,
 ) -> DatasetEvaluation:
     """Detect in every scene of a dataset and score against its ground truth.
 
@@ -766,7 +776,8 @@ def evaluate_dataset(
     format : str
         Dataset layout, or "auto".
     jobs : int
-        Worker processes (0: one per CPU). Results do not depend on it.
+        Worker processes of a local cluster (0: one per CPU; 1: this process). Results
+        do not depend on it.
     detect_options : mapping, optional
         Keyword arguments of :func:`ontodetect.pipeline.detect`.
     detections_dir : path, optional
@@ -788,6 +799,10 @@ def evaluate_dataset(
         ``detect_options``. With ``turns`` or ``seeds`` each run is an outcome of its
         own, named ``<scene>@<turn>deg-seed<seed>`` (:func:`variant_name`), and
         :attr:`DatasetEvaluation.by_variant` holds the figures per turn (or seed).
+    executor : Executor, optional
+        Where the scenes run (:func:`ontodetect._executor.open_executor`: a local or an
+        existing Dask cluster); ``jobs`` is then not used. Every worker must see
+        ``path``.
 
     Returns
     -------
@@ -818,7 +833,7 @@ def evaluate_dataset(
     class_ids = evaluation_classes(ontology)
     classes = list(dict.fromkeys(class_ids.values()))
     # Scenes in parallel already use the CPUs: the passes of a vote stay in each worker.
-    workers = _check_jobs(jobs)
+    workers = executor.workers if executor is not None else _check_jobs(jobs)
     # A plain run is the one variant (None, None): the scene as it is, with ``seed``.
     units = [
         (s, t, seed)
@@ -826,7 +841,8 @@ def evaluate_dataset(
         for t in (turn_list or [None])
         for seed in (seed_list or [None])
     ]
-    per_scene = {"jobs": 1, **opts} if workers > 1 and len(units) > 1 else opts
+    parallel = executor is not None and not isinstance(executor, InProcess)
+    per_scene = {"jobs": 1, **opts} if (parallel or workers > 1) and len(units) > 1 else opts
     work = functools.partial(
         _evaluate_variant,
         detect_options=per_scene,
@@ -834,7 +850,14 @@ def evaluate_dataset(
         save_dir=save_detections,
         class_ids=class_ids,
     )
-    outcomes = map_scenes(work, units, jobs=workers, description="Evaluating scenes")
+    outcomes = map_scenes(
+        work,
+        units,
+        jobs=workers,
+        description="Evaluating scenes",
+        executor=executor,
+        names=[variant_name(s.name, t, seed) for s, t, seed in units],
+    )
     if on_error == "raise":
         for o in outcomes:
             if not o.ok:

@@ -3,6 +3,8 @@
 - :func:`detect` (``_detect``): read → prepare → segment → score → label → vote.
 - :class:`Detection`, :class:`Result`, :func:`with_cad` (``_result``): what it returns;
   :meth:`Result.to_dict` is the ``detections.json`` document (docs/detections-format.md).
+- :func:`detect_tiled` (``_tiled``): a cloud of any size tile by tile on the floor plane,
+  the tiles mapped over an executor (in this process or on Dask), detections merged.
 - :func:`majority_labels`, :func:`pass_probabilities`, :func:`vote_turns`,
   :func:`class_for_label` (``_vote``): the vote over passes turned about the vertical.
 
@@ -22,6 +24,7 @@ from ..segment._measure import (
 )
 from ._detect import detect
 from ._result import DETECTIONS_FORMAT, Detection, Result, with_cad
+from ._tiled import TiledResult, detect_tiled
 from ._vote import VOTE_IOU, class_for_label, majority_labels, pass_probabilities, vote_turns
 
 __all__ = [
@@ -29,10 +32,12 @@ __all__ = [
     "VOTE_IOU",
     "Detection",
     "Result",
+    "TiledResult",
     "class_for_label",
     "describe_cluster",
     "describe_clusters",
     "detect",
+    "detect_tiled",
     "hidden_heights",
     "majority_labels",
     "open_below",

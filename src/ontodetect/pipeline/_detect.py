@@ -40,7 +40,7 @@ from ..ontology import (
     score_cluster,
     with_priors,
 )
-from ..preprocess import Ground, find_ground, smooth_depth
+from ..preprocess import Ground, GroundPlane, find_ground, smooth_depth
 from ..segment import Segmentation, segment
 from ..segment._measure import describe_clusters
 from ._recognize import recognize
@@ -78,6 +78,7 @@ def detect(
     seed: int = 0,
     viewpoint: Sequence[float] | None = None,
     scene_rooms: Mapping[str, float] | None = None,
+    plane: GroundPlane | None = None,
 ) -> Result:
     """Find the objects an ontology describes in a point cloud.
 
@@ -163,7 +164,7 @@ def detect(
     priors = class_priors(ontology, None if auto else room, indoor)
     environment = _environment_given(room, indoor, scene_rooms, auto)
     if d.proposals == "recognition":
-        return _recognition_result(cloud, config, ontology, priors, seed, eye)
+        return _recognition_result(cloud, config, ontology, priors, seed, eye, plane)
     passes = d.votes if len(cloud) <= d.vote_max_points else 1
     turned = [
         config.replace(prepare={"turn": (config.prepare.turn + t + 180.0) % 360.0 - 180.0})
@@ -175,7 +176,8 @@ def detect(
     # pass's turn: find them once for all passes (counted in "segment", where preparation
     # would have found them).
     scan = smooth_depth(cloud) if config.prepare.depth_smoothing else cloud
-    shared = _PassInputs(ontology, priors, seed, eye, find_ground(scan, config) if turned else None)
+    ground = find_ground(scan, config, plane=plane) if turned or plane is not None else None
+    shared = _PassInputs(ontology, priors, seed, eye, ground)
     before = time.perf_counter() - t0
     first = None
     if auto:
@@ -254,13 +256,15 @@ def _recognition_result(
     priors: Mapping[str, float],
     seed: int,
     eye: NDArray[np.float64] | None,
+    plane: GroundPlane | None = None,
 ) -> Result:
     """:func:`detect` with ``detect.proposals: recognition`` (:func:`recognize`)."""
     t0 = time.perf_counter()
     scan = smooth_depth(cloud) if config.prepare.depth_smoothing else cloud
+    ground = None if plane is None else find_ground(scan, config, plane=plane)
     before = time.perf_counter() - t0
     seg, scores, choices, found, timings, candidates = recognize(
-        scan, config, ontology, priors, seed=seed, viewpoint=eye, ground=None
+        scan, config, ontology, priors, seed=seed, viewpoint=eye, ground=ground
     )
     timings["segment"] += before
     return numbered_result(

@@ -39,6 +39,7 @@ from ._gravity import (
 )
 from ._prepare import (
     Ground,
+    GroundPlane,
     PreparedScene,
     find_ground,
     guess_scale,
@@ -58,6 +59,7 @@ __all__ = [
     "FloorFit",
     "FloorMap",
     "Ground",
+    "GroundPlane",
     "PreparedScene",
     "StructurePlane",
     "VoxelGrid",

@@ -61,6 +61,7 @@ __all__ = [
     "SPACING_SAMPLE",
     "SURFACE_CELL",
     "Ground",
+    "GroundPlane",
     "PreparedScene",
     "find_ground",
     "guess_scale",
@@ -362,6 +363,45 @@ class Ground:
     origin: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
 
 
+@dataclass(frozen=True)
+class GroundPlane:
+    """The floor of a whole scan in its input frame: found once (on a subsample) and given
+    to every part of it (the tiles of a building floor), which then neither estimate their
+    own up direction and floor nor guess their own units.
+
+    Attributes
+    ----------
+    up : (3,) float
+        Unit normal of the floor, pointing up.
+    height : float
+        ``up · x`` of the points on the floor (input units).
+    scale : float
+        ``k_s``, input units to metres.
+    area : float
+        Horizontal surface found on the floor (m², of the cloud it was found in).
+    """
+
+    up: NDArray[np.float64]
+    height: float
+    scale: float
+    area: float = 0.0
+
+    @classmethod
+    def from_ground(cls, ground: Ground) -> GroundPlane:
+        """The plane :func:`find_ground` found, in the input frame."""
+        u = np.asarray(ground.floor.normal, dtype=np.float64)
+        height = float(ground.floor.offset) / ground.scale + float(u @ ground.origin)
+        return cls(u.copy(), height, float(ground.scale), float(ground.floor.area))
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "up": [float(v) for v in self.up],
+            "height": self.height,
+            "scale": self.scale,
+            "area": self.area,
+        }
+
+
 def find_ground(
     cloud: PointCloud,
     config: Config | None = None,
@@ -369,10 +409,15 @@ def find_ground(
     scale: float | None = None,
     travelled: tuple[float, float] | None = None,
     up: str | ArrayLike | None = None,
+    plane: GroundPlane | None = None,
 ) -> Ground:
     """Scale, denoise and voxelize a scan and find its up direction and floor: the steps
     of :func:`prepare` that do not depend on ``prepare.turn`` (parameters as there; a
-    frame's depth steps are expected smoothed already)."""
+    frame's depth steps are expected smoothed already).
+
+    With ``plane`` (a :class:`GroundPlane` found for a larger scan this cloud is part
+    of), its up direction, floor and scale are taken as they are (``scale``, ``travelled``
+    and ``up`` are then not used)."""
     cfg = (config or Config()).prepare
     xyz = cloud.xyz
     n = len(xyz)
@@ -382,7 +427,10 @@ def find_ground(
     if origin.any():
         xyz = xyz - origin
     clock = _Clock()
-    k_s, scale_source = _choose_scale(xyz, cfg, scale, travelled)
+    if plane is not None:
+        k_s, scale_source = float(plane.scale), "plane"
+    else:
+        k_s, scale_source = _choose_scale(xyz, cfg, scale, travelled)
     scaled = xyz * k_s if k_s != 1.0 else xyz
 
     colors = cloud.rgb
@@ -424,22 +472,29 @@ def find_ground(
     cell = max(cfg.structure_cell, CELL_PER_SPACING * spacing)
     up_choice = default_up(cloud, cfg.up if up is None else up)
     confidence = 1.0
-    if isinstance(up_choice, str) and up_choice == "auto":
-        hint, max_angle = up_hint(cloud)
-        u, confidence = estimate_up(grid.centers, hint=hint, cell=cell, max_angle=max_angle)
+    if plane is not None:
+        u = as_direction(plane.up)
+        cells = cell_planes(grid.centers, cell)
+        offset = k_s * (float(plane.height) - float(u @ origin))
+        floor = FloorFit(u, offset, float(plane.area), True)
     else:
-        u = as_direction(up_choice)
-    cells = cell_planes(grid.centers, cell)
-    floor = find_floor(
-        grid.centers,
-        u,
-        cell=cell,
-        min_area=cfg.min_floor_area,
-        cells=cells,
-        refine=cfg.level_on_floor,
-    )
+        if isinstance(up_choice, str) and up_choice == "auto":
+            hint, max_angle = up_hint(cloud)
+            u, confidence = estimate_up(grid.centers, hint=hint, cell=cell, max_angle=max_angle)
+        else:
+            u = as_direction(up_choice)
+        cells = cell_planes(grid.centers, cell)
+        floor = find_floor(
+            grid.centers,
+            u,
+            cell=cell,
+            min_area=cfg.min_floor_area,
+            cells=cells,
+            refine=cfg.level_on_floor,
+        )
     if (
-        floor.found
+        plane is None
+        and floor.found
         and np.degrees(np.arccos(min(1.0, abs(float(floor.normal @ u))))) < LEVEL_MIN_ANGLE
     ):
         floor = FloorFit(u, floor.offset, floor.area, floor.found)
