@@ -19,12 +19,12 @@ Dask is imported only when a cluster is asked for.
 
 from __future__ import annotations
 
-import asyncio
 import contextlib
 import logging
 import os
 import queue
 import re
+import time
 import uuid
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any, TypeVar
@@ -274,10 +274,14 @@ class _DaskChannel:
         return self._q.get()
 
     def get(self, timeout: float | None = None) -> Any:
-        try:
-            return self._q.get(timeout=timeout)
-        except (TimeoutError, asyncio.TimeoutError):
-            raise queue.Empty from None
+        # Polled: a waiting get that times out is logged as an error by the scheduler.
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while True:
+            if self._q.qsize():
+                return self._q.get()
+            if deadline is not None and time.monotonic() >= deadline:
+                raise queue.Empty
+            time.sleep(0.02)
 
 
 def _slug(text: str) -> str:
