@@ -205,6 +205,7 @@ def detect(
     if eye is not None:
         eye = as_position(eye, "--viewpoint")
     inputs = expand_inputs(paths)
+    options = {"config": cfg, "ontology": onto, "room": room_arg, "indoor": indoor, "seed": seed}
     if tile is not None:
         if len(inputs) > 1 or cad or explain_ is not None:
             raise typer.BadParameter(
@@ -219,13 +220,7 @@ def detect(
             as_json=as_json,
             format=format,
             exports=exports,
-            detect_options={
-                "config": cfg,
-                "ontology": onto,
-                "room": room_arg,
-                "indoor": indoor,
-                "seed": seed,
-            },
+            detect_options=options,
         )
         return
     if overlap is not None:
@@ -239,15 +234,7 @@ def detect(
             executor=(scheduler, workers, jobs),
             as_json=as_json,
             format=format,
-            detect_options={
-                "config": cfg,
-                "ontology": onto,
-                "room": room_arg,
-                "indoor": indoor,
-                "seed": seed,
-                "viewpoint": eye,
-                "scene_rooms": scene_rooms,
-            },
+            detect_options={**options, "viewpoint": eye, "scene_rooms": scene_rooms},
             picture=picture,
             labelled_format=labelled_format.lower(),
             exports=exports,

@@ -466,6 +466,23 @@ def _leg(style: str, x: float, y: float, z0: float, z1: float, width: float) -> 
     return M.box_between((x - width / 2, y - width / 2, z0), (x + width / 2, y + width / 2, z1))
 
 
+def _four_legs(
+    asm: _Assembly,
+    style: str,
+    x: float,
+    y: float,
+    z0: float,
+    z1: float,
+    width: float,
+    color: NDArray[np.uint8],
+    group: str,
+) -> None:
+    """Four legs at (±x, ±y) from z0 to z1, in the order (-x, -y), (-x, y), (x, -y), (x, y)."""
+    for sx in (-1, 1):
+        for sy in (-1, 1):
+            asm.add("leg", _leg(style, sx * x, sy * y, z0, z1, width), color, group=group)
+
+
 def _tilted_box(lo: ArrayLike, hi: ArrayLike, tilt: float, pivot: ArrayLike) -> M.Mesh:
     """A box given in a frame reclined by ``tilt`` (top towards -y) about ``pivot``.
 
@@ -550,11 +567,7 @@ def _chair_back_and_legs(p: _Params, asm: _Assembly, *, arms: bool) -> dict[str,
         else M.box_between((-sw / 2, -sd / 2, seat_bottom), (sw / 2, sd / 2, seat_h))
     )
     asm.add("seat", seat_mesh, fabric if upholstered else wood)
-    for sx in (-1, 1):
-        for sy in (-1, 1):
-            asm.add(
-                "leg", _leg(leg_style, sx * lx, sy * ly, 0.0, seat_bottom, lw), wood, group="legs"
-            )
+    _four_legs(asm, leg_style, lx, ly, 0.0, seat_bottom, lw, wood, group="legs")
     if rails:
         rh, rt = 0.06, 0.018
         z0 = seat_bottom - rh
@@ -1611,14 +1624,7 @@ def _stool(p: _Params, shape: str) -> SceneObject:
             seat_color,
         )
         lx = size / 2 - 0.03
-        for sx in (-1, 1):
-            for sy in (-1, 1):
-                asm.add(
-                    "leg",
-                    _leg("square", sx * lx, sy * lx, 0.0, z_seat + 0.001, 2 * leg_r),
-                    wood,
-                    group="legs",
-                )
+        _four_legs(asm, "square", lx, lx, 0.0, z_seat + 0.001, 2 * leg_r, wood, group="legs")
         for k in range(4):
             bar_mesh = (
                 M.box_between((-lx, -0.008, 0.16), (lx, 0.008, 0.18))
@@ -2180,16 +2186,17 @@ def _cabinet(p: _Params) -> SceneObject:
             group="body",
         )
     else:
-        for sx in (-1, 1):
-            for sy in (-1, 1):
-                asm.add(
-                    "leg",
-                    _leg(
-                        "tapered", sx * (w / 2 - 0.04), sy * (d / 2 - 0.05), 0.0, z0 + 0.001, 0.035
-                    ),
-                    _shade(color, 0.7),
-                    group="body",
-                )
+        _four_legs(
+            asm,
+            "tapered",
+            (w / 2 - 0.04),
+            (d / 2 - 0.05),
+            0.0,
+            z0 + 0.001,
+            0.035,
+            _shade(color, 0.7),
+            group="body",
+        )
     top_t = 0.025
     y_front = d / 2 - 0.018
     asm.add(
@@ -2253,14 +2260,9 @@ def _nightstand(p: _Params) -> SceneObject:
     handle_color = p.color("handle_color", METAL)
     asm = _Assembly()
     z0 = 0.1
-    for sx in (-1, 1):
-        for sy in (-1, 1):
-            asm.add(
-                "leg",
-                _leg("tapered", sx * (w / 2 - 0.03), sy * (d / 2 - 0.03), 0.0, z0 + 0.001, 0.03),
-                color,
-                group="body",
-            )
+    _four_legs(
+        asm, "tapered", (w / 2 - 0.03), (d / 2 - 0.03), 0.0, z0 + 0.001, 0.03, color, group="body"
+    )
     asm.add(
         "body", M.box_between((-w / 2, -d / 2, z0), (w / 2, d / 2 - 0.018, h)), color, group="body"
     )
@@ -3301,16 +3303,17 @@ def _tv_stand(p: _Params) -> SceneObject:
         )
     else:
         z0 = leg_h
-        for sx in (-1, 1):
-            for sy in (-1, 1):
-                asm.add(
-                    "leg",
-                    _leg(
-                        "tapered", sx * (w / 2 - 0.05), sy * (d / 2 - 0.05), 0.0, z0 + 0.001, 0.035
-                    ),
-                    _shade(color, 0.7),
-                    group="body",
-                )
+        _four_legs(
+            asm,
+            "tapered",
+            (w / 2 - 0.05),
+            (d / 2 - 0.05),
+            0.0,
+            z0 + 0.001,
+            0.035,
+            _shade(color, 0.7),
+            group="body",
+        )
     y_front = d / 2 - 0.018 - 0.025  # the handles stay within the top's depth
     asm.add(
         "body",
