@@ -195,6 +195,10 @@ def _footprint(box: Any) -> NDArray:
     return np.stack([xy.min(axis=0), xy.max(axis=0)])
 
 
+#: Clusters compared at once by :func:`shelter_heights` (bounds its memory).
+SHELTER_BLOCK = 2048
+
+
 def shelter_heights(seg: Segmentation) -> NDArray:
     """(clusters,) height of the highest large horizontal surface beside each cluster.
 
@@ -214,9 +218,20 @@ def shelter_heights(seg: Segmentation) -> NDArray:
         ]
         tops[k] = max(flat, default=-math.inf)
         boxes[k] = _footprint(c.box)
-    if n == 0:
-        return tops
-    gap = np.maximum(boxes[None, :, 0] - boxes[:, None, 1], boxes[:, None, 0] - boxes[None, :, 1])
-    near = np.all(gap <= SHELTER_GAP, axis=2)
-    np.fill_diagonal(near, False)
-    return np.where(near, tops[None, :], -math.inf).max(axis=1)
+    out = np.full(n, -math.inf)
+    # Only clusters with a top can shelter another: compare every cluster with those alone,
+    # a block of rows at a time (a building floor has tens of thousands of clusters, and an
+    # all-pairs table of them would not fit in memory).
+    shelters = np.flatnonzero(np.isfinite(tops))
+    if n == 0 or not len(shelters):
+        return out
+    theirs = boxes[shelters]
+    for start in range(0, n, SHELTER_BLOCK):
+        rows = np.arange(start, min(n, start + SHELTER_BLOCK))
+        mine = boxes[rows]
+        gap = np.maximum(
+            theirs[None, :, 0] - mine[:, None, 1], mine[:, None, 0] - theirs[None, :, 1]
+        )
+        near = np.all(gap <= SHELTER_GAP, axis=2) & (rows[:, None] != shelters[None, :])
+        out[rows] = np.where(near, tops[shelters][None, :], -math.inf).max(axis=1)
+    return out
