@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from ontodetect.errors import InvalidParameterError
@@ -237,3 +237,31 @@ def test_width_is_the_widest_disc_not_the_box():
     # A sparse top is as wide as its short side once its gaps are closed.
     holes = g[np.random.default_rng(0).random(len(g)) < 0.5]
     assert _width(holes, cell) == pytest.approx(0.9, abs=0.15)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.integers(0, 40),
+    st.integers(0, 2**32 - 1),
+    st.floats(0.0, 1.0),
+)
+def test_nearest_tops_equals_the_all_pairs_definition(n, seed, share):
+    """The blocked search over the clusters with a top gives what comparing every pair
+    gives (the highest top of another footprint within SHELTER_GAP)."""
+    from ontodetect.segment import _measure
+
+    rng = np.random.default_rng(seed)
+    lo = rng.uniform(0, 5, (n, 2))
+    boxes = np.stack([lo, lo + rng.uniform(0.05, 1.5, (n, 2))], axis=1)
+    tops = np.where(rng.random(n) < share, rng.uniform(0.3, 1.2, n), -np.inf)
+    gap = np.maximum(boxes[None, :, 0] - boxes[:, None, 1], boxes[:, None, 0] - boxes[None, :, 1])
+    near = np.all(gap <= _measure.SHELTER_GAP, axis=2)
+    np.fill_diagonal(near, False)
+    expected = np.where(near, tops[None, :], -np.inf).max(axis=1) if n else np.zeros(0)
+    old_block = _measure.SHELTER_BLOCK
+    try:
+        _measure.SHELTER_BLOCK = 7  # several blocks even for small n
+        got = _measure.nearest_tops(boxes, tops)
+    finally:
+        _measure.SHELTER_BLOCK = old_block
+    np.testing.assert_array_equal(got, expected)

@@ -218,10 +218,25 @@ def shelter_heights(seg: Segmentation) -> NDArray:
         ]
         tops[k] = max(flat, default=-math.inf)
         boxes[k] = _footprint(c.box)
+    return nearest_tops(boxes, tops)
+
+
+def nearest_tops(boxes: NDArray[np.float64], tops: NDArray[np.float64]) -> NDArray[np.float64]:
+    """For each footprint ``boxes[k]`` (``[[xmin, ymin], [xmax, ymax]]``), the highest of
+    the other footprints' ``tops`` within ``SHELTER_GAP`` of it (``-inf``: none).
+
+    Only footprints with a finite top can shelter another, so every footprint is compared
+    with those alone, a block of rows at a time: a building floor has tens of thousands of
+    clusters, and an all-pairs table of them would not fit in memory.
+
+    Examples
+    --------
+    >>> boxes = np.array([[[0, 0], [1, 1]], [[1.05, 0], [2, 1]], [[5, 5], [6, 6]]], float)
+    >>> nearest_tops(boxes, np.array([0.75, -np.inf, 0.7])).tolist()
+    [-inf, 0.75, -inf]
+    """
+    n = len(boxes)
     out = np.full(n, -math.inf)
-    # Only clusters with a top can shelter another: compare every cluster with those alone,
-    # a block of rows at a time (a building floor has tens of thousands of clusters, and an
-    # all-pairs table of them would not fit in memory).
     shelters = np.flatnonzero(np.isfinite(tops))
     if n == 0 or not len(shelters):
         return out
