@@ -15,22 +15,7 @@ import subprocess
 import tempfile
 from pathlib import Path
 
-from ontodetect.render import write_viewer
-
-#: The flags of the viewer's browser test (tests/test_viewer.py): no display, GPU or network.
-FLAGS = (
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--enable-unsafe-swiftshader",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-    "--hide-scrollbars",
-    "--virtual-time-budget=10000",
-)
+from ontodetect.render import CHROMIUM_FLAGS, write_viewer
 
 
 def main() -> int:
@@ -52,7 +37,7 @@ def main() -> int:
         subprocess.run(
             [
                 browser,
-                *FLAGS,
+                *CHROMIUM_FLAGS,
                 f"--user-data-dir={profile}",
                 f"--window-size={args.size}",
                 f"--screenshot={shot}",

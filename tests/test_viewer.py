@@ -16,26 +16,8 @@ from ontodetect.errors import InvalidParameterError, ReadError
 from ontodetect.io import read_cloud, read_detections
 from ontodetect.outputs import write_outputs
 from ontodetect.pipeline import detect
-from ontodetect.render import thin_points, viewer_html
+from ontodetect.render import CHROMIUM_FLAGS, thin_points, viewer_html
 from ontodetect.synth import synthesize, write_synth
-
-#: Chromium flags that work in a container without a display, GPU or network.
-CHROMIUM_FLAGS = (
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    # WebGL on the CPU (SwiftShader): without a GPU, Chromium asks for this opt-in
-    "--enable-unsafe-swiftshader",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-    "--hide-scrollbars",
-    "--window-size=1200,800",
-    # the page draws at load; virtual time lets it finish before the dump or the screenshot
-    "--virtual-time-budget=10000",
-)
 
 
 def chromium() -> str | None:
@@ -158,7 +140,7 @@ def test_headless_chromium_draws_every_box(run, tmp_path):
     n = len(doc["detections"])
     profile = tmp_path / "profile"
     profile.mkdir()
-    base = [browser, *CHROMIUM_FLAGS, f"--user-data-dir={profile}"]
+    base = [browser, *CHROMIUM_FLAGS, "--window-size=1200,800", f"--user-data-dir={profile}"]
 
     shown = _body(base, page)
     assert shown.get("ready") == "1" and "error" not in shown, shown

@@ -11,9 +11,17 @@ from __future__ import annotations
 
 from ..geometry import box_corners
 from ._scene import CLASS_COLORS, MAX_POINTS, BoxDrawing, class_color, render_scene
-from ._viewer import THREE_VERSION, VIEWER_MAX_POINTS, thin_points, viewer_html, write_viewer
+from ._viewer import (
+    CHROMIUM_FLAGS,
+    THREE_VERSION,
+    VIEWER_MAX_POINTS,
+    thin_points,
+    viewer_html,
+    write_viewer,
+)
 
 __all__ = [
+    "CHROMIUM_FLAGS",
     "CLASS_COLORS",
     "MAX_POINTS",
     "THREE_VERSION",

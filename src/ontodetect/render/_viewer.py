@@ -26,8 +26,32 @@ from ..geometry import box_corners, rotation_between
 from ..io import atomic_write_text, read_cloud, read_detections
 from ._scene import class_color
 
-__all__ = ["THREE_VERSION", "VIEWER_MAX_POINTS", "thin_points", "viewer_html", "write_viewer"]
+__all__ = [
+    "CHROMIUM_FLAGS",
+    "THREE_VERSION",
+    "VIEWER_MAX_POINTS",
+    "thin_points",
+    "viewer_html",
+    "write_viewer",
+]
 
+#: Flags that let headless Chromium draw the page in a container without a display, GPU or
+#: network (the viewer's browser test and the README's screenshots use them).
+CHROMIUM_FLAGS = (
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    # WebGL on the CPU (SwiftShader): without a GPU, Chromium asks for this opt-in
+    "--enable-unsafe-swiftshader",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--hide-scrollbars",
+    # the page draws at load; virtual time lets it finish before the dump or the screenshot
+    "--virtual-time-budget=10000",
+)
 #: Points the page carries at most: a browser turns this many smoothly on a laptop.
 VIEWER_MAX_POINTS = 250_000
 #: Share of the budget that detected objects' points may take first, so that small
