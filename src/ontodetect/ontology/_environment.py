@@ -97,12 +97,8 @@ def object_prior(
     indoor: float | None = None,
 ) -> float:
     """P_obj of one class: Eq. 3.10 with a room distribution, Eq. 3.5 with P_in, else 1."""
-    if rooms is not None and cls.prior_rooms is not None:
-        table = (
-            room_table(cls.prior_rooms)
-            if isinstance(cls.prior_rooms, str)
-            else {str(k): float(v) for k, v in cls.prior_rooms.items()}
-        )
+    table = _class_table(cls) if rooms is not None else None
+    if table is not None:
         return float(sum(p * table.get(n, 0.0) for n, p in rooms.items()))
     if indoor is not None and cls.prior_indoor is not None:
         if not 0.0 <= indoor <= 1.0:
