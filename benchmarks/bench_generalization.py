@@ -447,12 +447,13 @@ def stability(
     jobs: int,
     seed: int,
     config: Config | None = None,
+    room: str | None = "auto",
 ) -> dict[str, Any]:
     """Share of reference detections that reappear, per transform and scan (detected with
-    ``config`` when given)."""
+    ``config`` when given, and the room prior ``room``)."""
     names = list(stability_transforms(turns))
     units = [(s, t, tuple(turns)) for s in scans for t in [None, *names]]
-    options: dict[str, Any] = {"jobs": 1, "seed": seed}
+    options: dict[str, Any] = {"jobs": 1, "seed": seed, "room": room}
     if config is not None:
         options["config"] = config
     work = functools.partial(stability_unit, detect_options=options)
@@ -693,6 +694,12 @@ def main(argv: list[str] | None = None) -> int:
         help="a configuration value for detection, e.g. detect.proposals=recognition (repeatable)",
     )
     ap.add_argument(
+        "--room",
+        default="auto",
+        help="the room prior of every detection: auto (estimated from the scan, the default), "
+        "none (no prior), or a room category such as office",
+    )
+    ap.add_argument(
         "--source",
         choices=("furnished", "parametric"),
         default="furnished",
@@ -738,6 +745,11 @@ def main(argv: list[str] | None = None) -> int:
         return 2
 
 
+def _room_option(room: str) -> str | None:
+    """``--room`` as :func:`ontodetect.pipeline.detect` takes it ("none": no prior)."""
+    return None if room.strip().lower() == "none" else room
+
+
 def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
     """The three measurements, printed and written to ``args.out/generalization.json``."""
     from ontodetect._progress import use_reporter
@@ -747,7 +759,7 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
     out: Path = args.out
     out.mkdir(parents=True, exist_ok=True)
     jobs = args.jobs
-    opts: dict[str, Any] = {"seed": args.seed}
+    opts: dict[str, Any] = {"seed": args.seed, "room": _room_option(args.room)}
     if args.overrides:
         opts["config"] = Config().with_overrides(args.overrides)
     source = room_source(args.source)
@@ -759,6 +771,7 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
         "jobs": jobs,
         "seed": args.seed,
         "overrides": list(args.overrides),
+        "room": args.room,
         "scene_source": dataclasses.asdict(source),
     }
     console.print(
@@ -849,7 +862,7 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
         picked = richest(real.scenes, count, one_per=lambda o: o.source.group)
         picked += richest(fused, count, one_per=lambda o: by_name[o.name].room)
         t0 = time.perf_counter()
-        stab = stability(picked, turns, jobs, args.seed, opts.get("config"))
+        stab = stability(picked, turns, jobs, args.seed, opts.get("config"), opts["room"])
         stab["seconds"] = round(time.perf_counter() - t0, 1)
         doc["stability"] = stab
         console.print(
