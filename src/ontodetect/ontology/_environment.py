@@ -13,7 +13,7 @@ import math
 from collections.abc import Iterable, Mapping
 from typing import Any
 
-from .._rules import PROBABILITY, WEIGHT, check_param
+from .._rules import PROBABILITY, WEIGHT, Interval, check_param
 from ..errors import InvalidParameterError
 from ._places import places_data, room_table_names
 from ._schema import ObjectClass, Ontology
@@ -22,6 +22,7 @@ __all__ = [
     "class_priors",
     "object_prior",
     "relative_priors",
+    "room_area_likelihood",
     "room_categories",
     "room_distribution",
     "room_table",
@@ -129,8 +130,56 @@ def _class_table(cls: ObjectClass) -> dict[str, float] | None:
     return {str(k): float(v) for k, v in cls.prior_rooms.items()}
 
 
+#: The z of a log-normal's 95th percentile (Φ⁻¹(0.95)).
+_Z95 = 1.6448536269514722
+
+
+def room_area_likelihood(area: float, *, whole_room: bool = True) -> dict[str, float]:
+    """How likely each category makes a floor area ``area`` (m²) seen by the scan,
+    relative to the likeliest (the largest is 1).
+
+    Room areas of a category N are log-normal (``areas`` of places205.yaml: the median
+    and the 95th percentile, from standards and design guides), ``ln A ~ N(μ_N, σ_N²)``.
+    A scan of a **whole room** (a fused scan walked around it) sees its floor area:
+    the likelihood is that density. A **partial** view (one camera frame) sees a share
+    ``u`` of the floor, unknown, taken uniform on (0, 1) (the least said), so
+    ``ln A_seen = ln A − E`` with ``E ~ Exp(1)``: an exponentially modified normal, whose
+    log-density is ``x − μ + σ²/2 + ln Φ(−(x − μ + σ²)/σ)`` at ``x = ln A_seen``. A small
+    part of a large hall then rules nothing out; 40 m² seen rules out a bathroom either way.
+
+    Examples
+    --------
+    >>> small = room_area_likelihood(6.0)
+    >>> round(small["bathroom"], 2), small["classroom"] < 1e-6
+    (1.0, True)
+    >>> large = room_area_likelihood(60.0)
+    >>> large["bathroom"] < 1e-6, round(large["classroom"], 2)
+    (True, 1.0)
+    >>> frame = room_area_likelihood(6.0, whole_room=False)
+    >>> frame["classroom"] > 0.05  # a frame may see 6 m² of a classroom
+    True
+    """
+    from scipy.special import log_ndtr  # lazy: scipy.special is heavy to import
+
+    area = check_param("area", Interval(0.0), area)
+    x = math.log(area)
+    logs: dict[str, float] = {}
+    for name, a in _data()["areas"].items():
+        mu = math.log(float(a["median"]))
+        sigma = (math.log(float(a["p95"])) - mu) / _Z95
+        if whole_room:
+            logs[name] = -0.5 * ((x - mu) / sigma) ** 2 - math.log(sigma)
+        else:
+            logs[name] = x - mu + sigma**2 / 2 + float(log_ndtr(-(x - mu + sigma**2) / sigma))
+    top = max(logs.values())
+    return {n: math.exp(v - top) for n, v in logs.items()}
+
+
 def rooms_from_objects(
-    found: Iterable[Mapping[str, float]], ontology: Ontology
+    found: Iterable[Mapping[str, float]],
+    ontology: Ontology,
+    *,
+    shape: Mapping[str, float] | None = None,
 ) -> dict[str, float]:
     """P_N from the objects a first labelling found, every class competing.
 
@@ -143,7 +192,9 @@ def rooms_from_objects(
     ``Σ_c p_c · r_c(N)`` (a class without a table, and "none", count 1), and from a
     uniform P_N, ``P(N | objects) ∝ Π_objects Σ_c p_c · r_c(N)`` (virtual evidence,
     Pearl 1988, §2.2.2). A WC and a basin make a bathroom likely; a dozen chairs and a
-    table a room for sitting at a table; one doubtful object moves little.
+    table a room for sitting at a table; one doubtful object moves little. ``shape``, a
+    likelihood of each category from the room's shape (:func:`room_area_likelihood`),
+    is one more factor.
 
     Examples
     --------
@@ -169,6 +220,9 @@ def rooms_from_objects(
         return ratios[name]
 
     logs = dict.fromkeys(cats, 0.0)
+    if shape is not None:
+        for n in cats:
+            logs[n] += math.log(max(float(shape.get(n, 0.0)), 1e-300))
     for probs in found:
         factor = dict.fromkeys(cats, 0.0)
         for name, p in probs.items():

@@ -25,6 +25,12 @@ def places_data() -> dict[str, Any]:
             raise ValueError(f"places205.yaml: table {name!r} names unknown {sorted(unknown)}")
         for category, row in data["categories"].items():
             row[name] = float(values.get(category, table["default"]))
+    areas = data.get("areas", {})
+    if set(areas) != set(data["categories"]):  # pragma: no cover - checked by the tests
+        raise ValueError("places205.yaml: areas must give every category, and only those")
+    for category, area in areas.items():
+        if not 0 < float(area["median"]) < float(area["p95"]):  # pragma: no cover
+            raise ValueError(f"places205.yaml: areas of {category!r}: 0 < median < p95")
     return data
 
 

@@ -35,12 +35,13 @@ from ..ontology import (
     builtin_ontology,
     class_priors,
     relative_priors,
+    room_area_likelihood,
     room_distribution,
     rooms_from_objects,
     score_cluster,
     with_priors,
 )
-from ..preprocess import Ground, GroundPlane, find_ground, smooth_depth
+from ..preprocess import Ground, GroundPlane, find_ground, floor_area, smooth_depth
 from ..segment import Segmentation, segment
 from ..segment._measure import describe_clusters
 from ._recognize import recognize
@@ -184,14 +185,22 @@ def detect(
         # A first labelling, every class competing and no prior, says what the room holds:
         # P_N from it (and from photographs, when given), then every pass with its priors.
         first = _one_pass(scan, config, shared)
-        rooms = rooms_from_objects(_found_objects(first[2], first[1]), ontology)
+        area = floor_area(first[0].prepared.voxels.centers)
+        whole = eye is None and pixel_grid(cloud) is None  # a fused scan, not one view
+        shape = room_area_likelihood(area, whole_room=whole) if area > 0 else None
+        rooms = rooms_from_objects(_found_objects(first[2], first[1]), ontology, shape=shape)
         if scene_rooms is not None:
             from ..environment import combine_room_priors  # lazy: only with photographs
 
             rooms = combine_room_priors(rooms, scene_rooms)
         priors = relative_priors(ontology, rooms)
         shared = dataclasses.replace(shared, priors=priors)
-        environment = {"source": "scan+images" if scene_rooms else "scan", "rooms": rooms}
+        environment = {
+            "source": "scan+images" if scene_rooms else "scan",
+            "rooms": rooms,
+            "floor_area": round(area, 2),
+            "whole_room": whole,
+        }
     if workers:
         with ProcessPoolExecutor(max_workers=workers, mp_context=fork_context()) as pool:
             futures = [pool.submit(_pass_clusters, scan, c, shared) for c in turned]

@@ -48,7 +48,7 @@ from ._prepare import (
     scale_from_travel,
     surface_spacing,
 )
-from ._structure import STRUCTURE_LABELS, StructurePlane, find_structure
+from ._structure import STRUCTURE_LABELS, StructurePlane, find_structure, floor_area
 from ._surface import estimate_normals, graph_normals, smooth_surface
 from ._voxel import VoxelGrid, grouped_covariance, voxelize
 
@@ -73,6 +73,7 @@ __all__ = [
     "find_floor",
     "find_ground",
     "find_structure",
+    "floor_area",
     "floor_height_map",
     "graph_normals",
     "grouped_covariance",

@@ -14,7 +14,7 @@ from numpy.typing import NDArray
 
 from ._gravity import CellPlanes, window_sum
 
-__all__ = ["STRUCTURE_LABELS", "StructurePlane", "find_structure"]
+__all__ = ["STRUCTURE_LABELS", "StructurePlane", "find_structure", "floor_area"]
 
 #: Label of each voxel in ``PreparedScene.structure_label``.
 STRUCTURE_LABELS = {0: "none", 1: "floor", 2: "wall", 3: "ceiling"}
@@ -299,3 +299,40 @@ def find_structure(
         labels[(c[:, 2] > -ceiling.offset - floor_band) & (labels == NONE)] = CEILING
         planes.append(ceiling)
     return labels, planes
+
+
+#: Floor area of a scan: its footprint on a grid of this cell (m), ...
+AREA_CELL = 0.1
+#: ... of its points from the floor up to this height (m): floor, furniture and walls below
+#: the height where a room's walls may lean or its ceiling fittings hang.
+AREA_TOP = 2.0
+#: Cells of closing: gaps up to twice this many cells (a chair's shadow on the floor, a
+#: hole in the scan) count as floor.
+AREA_CLOSING = 2
+
+
+def floor_area(
+    centers: NDArray[np.float64], *, cell: float = AREA_CELL, top: float = AREA_TOP
+) -> float:
+    """Area (m²) of the floor a levelled scan covers: the cells of a horizontal grid that
+    its points between the floor and ``top`` fall in, with small gaps closed and holes
+    filled (floor hidden under furniture counts).
+
+    >>> xy = np.mgrid[0:3:0.05, 0:2:0.05].reshape(2, -1).T
+    >>> floor = np.c_[xy, np.zeros(len(xy))]
+    >>> round(floor_area(floor), 1)
+    6.0
+    """
+    from scipy import ndimage  # lazy: only the room prior measures the floor
+
+    z = centers[:, 2]
+    pts = centers[(z > -cell) & (z < top), :2]
+    if len(pts) == 0:
+        return 0.0
+    ij = np.floor(pts / cell).astype(np.int64)
+    ij -= ij.min(axis=0) - (AREA_CLOSING + 1)
+    grid = np.zeros(tuple(ij.max(axis=0) + AREA_CLOSING + 2), dtype=bool)
+    grid[ij[:, 0], ij[:, 1]] = True
+    grid = ndimage.binary_closing(grid, np.ones((3, 3), dtype=bool), iterations=AREA_CLOSING)
+    grid = ndimage.binary_fill_holes(grid)
+    return float(np.count_nonzero(grid)) * cell * cell
