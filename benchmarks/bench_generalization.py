@@ -724,12 +724,21 @@ def main(argv: list[str] | None = None) -> int:
         help="evaluate only the simulated scans of these room types (comma-separated); the "
         "cached set stays whole",
     )
+    ap.add_argument(
+        "--stability-scans",
+        default=None,
+        help="with --only stability: the scans to turn, move and round (comma-separated "
+        "names of real scans and simulated scans, e.g. scene0002_01,classroom-s5-fused) "
+        "instead of the richest ones of the real and simulated runs",
+    )
     args = ap.parse_args(argv)
     parts = {p.strip() for p in args.only.split(",") if p.strip()}
     if not parts or parts - {"real", "sim", "stability"}:
         ap.error(f"--only takes real, sim and stability, got {args.only!r}")
-    if "stability" in parts and parts != {"real", "sim", "stability"}:
-        ap.error("--only stability needs real and sim too")
+    whole = parts == {"real", "sim", "stability"}
+    alone = parts == {"stability"} and args.stability_scans
+    if "stability" in parts and not (whole or alone):
+        ap.error("--only stability needs real and sim too, or --stability-scans")
     args.only = parts
     if args.jobs < 0:
         ap.error(f"--jobs must be >= 0, got {args.jobs}")
@@ -779,6 +788,9 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
         + (" (Sweet Home 3D catalogue furniture)" if source.name == "furnished" else "")
     )
     with use_reporter(reporter):
+        if args.only == {"stability"}:
+            picked = _named_scans(args, real_scenes, source)
+            return _run_stability(args, picked, jobs, opts, doc, start)
         # (a) real development scans
         if "real" in args.only:
             real = _run_real(args, real_scenes, jobs, opts, doc)
@@ -857,21 +869,51 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
         if "stability" not in args.only:
             return _finish(out, doc, start)
         count = 1 if args.quick else STABILITY_SCANS
-        turns = QUICK_STABILITY_TURNS if args.quick else STABILITY_TURNS
         fused = [o for o in sim.scenes if by_name[o.name].variant == "fused"]
         picked = richest(real.scenes, count, one_per=lambda o: o.source.group)
         picked += richest(fused, count, one_per=lambda o: by_name[o.name].room)
-        t0 = time.perf_counter()
-        stab = stability(picked, turns, jobs, args.seed, opts.get("config"), opts["room"])
-        stab["seconds"] = round(time.perf_counter() - t0, 1)
-        doc["stability"] = stab
-        console.print(
-            stability_table(
-                f"Stability: detections that reappear (same label, IoU >= {STABILITY_IOU})",
-                stab,
-            )
+        return _run_stability(args, picked, jobs, opts, doc, start)
+
+
+def _named_scans(
+    args: argparse.Namespace, real_scenes: list[SceneSource], source: RoomSource
+) -> list[SceneSource]:
+    """``--stability-scans``: real scans of ``--real`` and simulated scans of the set."""
+    names = [n.strip() for n in args.stability_scans.split(",") if n.strip()]
+    real = {s.name: s for s in real_scenes}
+    scans = simulated_set(source.room_types)
+    folder = args.sim_set or args.out
+    if args.sim_set is None:
+        folder = next(iter(sorted(args.out.glob(f"sim-{source.name}-*"))), args.out)
+    sim = {s.name: s for s in _sources(folder, scans)}
+    unknown = [n for n in names if n not in real and n not in sim]
+    if unknown:
+        raise InvalidParameterError(
+            "--stability-scans", "names of real scans or of the simulated set's scans", unknown
         )
-    return _finish(out, doc, start)
+    return [real[n] if n in real else sim[n] for n in names]
+
+
+def _run_stability(
+    args: argparse.Namespace,
+    picked: list[SceneSource],
+    jobs: int,
+    opts: dict[str, Any],
+    doc: dict[str, Any],
+    start: float,
+) -> int:
+    """(c): the picked scans turned, moved and rounded, printed and put in ``doc``."""
+    turns = QUICK_STABILITY_TURNS if args.quick else STABILITY_TURNS
+    t0 = time.perf_counter()
+    stab = stability(picked, turns, jobs, args.seed, opts.get("config"), opts["room"])
+    stab["seconds"] = round(time.perf_counter() - t0, 1)
+    doc["stability"] = stab
+    console.print(
+        stability_table(
+            f"Stability: detections that reappear (same label, IoU >= {STABILITY_IOU})", stab
+        )
+    )
+    return _finish(args.out, doc, start)
 
 
 def _run_real(
