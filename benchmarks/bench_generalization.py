@@ -731,7 +731,18 @@ def main(argv: list[str] | None = None) -> int:
         "names of real scans and simulated scans, e.g. scene0002_01,classroom-s5-fused) "
         "instead of the richest ones of the real and simulated runs",
     )
+    ap.add_argument(
+        "--turns",
+        default=None,
+        help="stability: the turns (degrees, comma-separated) instead of "
+        + ", ".join(f"{t:g}" for t in STABILITY_TURNS),
+    )
     args = ap.parse_args(argv)
+    if args.turns is not None:
+        try:
+            args.turns = tuple(float(t) for t in args.turns.split(",") if t.strip())
+        except ValueError:
+            ap.error(f"--turns takes degrees separated by commas, got {args.turns!r}")
     parts = {p.strip() for p in args.only.split(",") if p.strip()}
     if not parts or parts - {"real", "sim", "stability"}:
         ap.error(f"--only takes real, sim and stability, got {args.only!r}")
@@ -903,7 +914,7 @@ def _run_stability(
     start: float,
 ) -> int:
     """(c): the picked scans turned, moved and rounded, printed and put in ``doc``."""
-    turns = QUICK_STABILITY_TURNS if args.quick else STABILITY_TURNS
+    turns = args.turns or (QUICK_STABILITY_TURNS if args.quick else STABILITY_TURNS)
     t0 = time.perf_counter()
     stab = stability(picked, turns, jobs, args.seed, opts.get("config"), opts["room"])
     stab["seconds"] = round(time.perf_counter() - t0, 1)
