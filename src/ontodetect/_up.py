@@ -123,8 +123,10 @@ def as_direction(up: str | ArrayLike) -> NDArray[np.float64]:
 
 
 def cell_index(points: ArrayLike, cell: float) -> tuple[NDArray[np.int64], int]:
-    """Cell of every point on a grid of edge ``cell`` from the points' minimum corner, and
-    the number of occupied cells; cells are numbered in increasing (x, y, z) order, as
+    """Cell of every point on a grid of edge ``cell`` laid from the frame's origin (cells
+    ``[k·cell, (k+1)·cell)``, so that the same points moved by whole cells, or turned by a
+    quarter about the origin, fall in the same cells), and the number of occupied cells;
+    cells are numbered in increasing (x, y, z) order, as
     :func:`ontodetect.preprocess.voxelize` numbers its voxels.
 
     Examples
@@ -138,7 +140,8 @@ def cell_index(points: ArrayLike, cell: float) -> tuple[NDArray[np.int64], int]:
         raise InvalidParameterError("cell", "a number > 0", cell)
     if len(pts) == 0:
         return np.zeros(0, dtype=np.int64), 0
-    keys = np.floor((pts - pts.min(axis=0)) / cell).astype(np.int64)
+    keys = np.floor(pts / cell).astype(np.int64)
+    keys -= keys.min(axis=0)
     code = np.ravel_multi_index(keys.T, keys.max(axis=0) + 1)
     _, inverse = np.unique(code, return_inverse=True)
     inverse = inverse.reshape(-1).astype(np.int64)

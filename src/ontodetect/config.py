@@ -205,6 +205,17 @@ class PrepareConfig(_Section):
     level_on_floor: bool = _param(
         True, Boolean(), "Refine the up direction with the floor plane's normal."
     )
+    # Grids (voxels, cells, floor tiles) are laid along the levelled frame's axes from its
+    # origin. "canonical" turns that frame about the vertical so that the walls' main
+    # direction is its x axis and puts its origin at the median of the scan: the same room
+    # then meets the same grids however it was turned or moved in its file. "input" keeps
+    # the file's horizontal axes and origin.
+    frame: str = _param(
+        "canonical",
+        OneOf(("canonical", "input")),
+        "Horizontal frame of the grids: 'canonical' (walls along x, origin at the scan's "
+        "median) or 'input' (the file's axes).",
+    )
     # The voxel grid and the cells are laid along the levelled frame's axes; a turn about
     # the vertical shows the same scan to them from another angle (detect's votes).
     turn: float = _param(

@@ -111,7 +111,8 @@ def floor_height_map(cells: CellPlanes, *, tile: float = 0.5, max_warp: float = 
     ok = cells.planar & (np.abs(cells.normals[:, 2]) > np.cos(np.radians(HORIZONTAL_TOLERANCE)))
     ok &= np.abs(cells.centers[:, 2]) <= max_warp
     ctr = cells.centers
-    lo = ctr[:, :2].min(axis=0) if len(ctr) else np.zeros(2)
+    # Tiles laid from the frame's origin, as every grid of preparation.
+    lo = np.floor(ctr[:, :2].min(axis=0) / tile) * tile if len(ctr) else np.zeros(2)
     hi = ctr[:, :2].max(axis=0) if len(ctr) else np.zeros(2)
     shape = tuple(int(v) for v in np.floor((hi - lo) / tile).astype(np.int64) + 1)
     origin = lo + tile / 2

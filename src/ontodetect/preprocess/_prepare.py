@@ -587,11 +587,24 @@ def prepare(
     grid, inliers, spacing, cell = ground.voxels, ground.inliers, ground.spacing, ground.cell
     confidence, cells, floor = ground.up_confidence, ground.cells, ground.floor
     to_level = level_transform(floor.normal, floor.offset, k_s)
+    canonical = cfg.frame == "canonical"
+    if canonical:
+        R = to_level[:3, :3] / k_s
+        planar = cells.planar
+        to_level = (
+            canonical_pose(
+                grid.centers @ R.T + to_level[:3, 3],
+                cells.normals[planar] @ R.T,
+                cells.counts[planar],
+            )
+            @ to_level
+        )
     if cfg.turn:
         to_level = yaw_pose(0.0, 0.0, math.radians(cfg.turn)) @ to_level
     R = to_level[:3, :3] / k_s
     shift = to_level[:3, 3]
-    rotated = float(np.linalg.norm(R - np.eye(3))) > IDENTITY_TOLERANCE
+    # The canonical frame lays the grids anew from its origin, even when it only moves.
+    rotated = canonical or float(np.linalg.norm(R - np.eye(3))) > IDENTITY_TOLERANCE
     levelled_xyz = xyz @ to_level[:3, :3].T + shift
     # Plane fits of the levelled scene: the same cells shifted when only translated.
     if rotated:
@@ -692,6 +705,63 @@ def prepare(
             "timings": clock.laps,
         },
     )
+
+
+#: Cells whose normal is within this angle (deg) of horizontal are walls' cells, whose
+#: direction the canonical frame follows.
+CANONICAL_VERTICAL = 10.0
+
+
+def canonical_pose(
+    centers: NDArray[np.float64], normals: NDArray[np.float64], weights: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """The turn about the vertical and the shift in the floor plane that put a levelled
+    scan in its canonical frame (``prepare.frame: canonical``): the walls' main direction
+    along x, the median of its points at the origin.
+
+    The walls' direction is the circular mean of four times the azimuths of the vertical
+    cells' normals (weighted by their points), so that walls at right angles agree (a
+    Manhattan room) and a turn by any angle turns it by the same angle; without walls,
+    the main axis of the points' spread. The median, unlike the minimum corner, moves
+    little when points are dropped or jittered. A scan turned by any angle and moved then
+    meets the same grids, up to a quarter turn about the origin, which every grid laid
+    from the origin (``_up.cell_index``, :func:`voxelize`) maps onto itself.
+
+    Parameters
+    ----------
+    centers : (m, 3) float
+        Points (or voxel centres) in the levelled frame.
+    normals : (g, 3) float and weights : (g,) float
+        Normals of planar cells in the levelled frame, and their weights.
+
+    Returns
+    -------
+    (4, 4) float
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> pts = np.c_[rng.random((500, 2)) * [4, 2] + 10, rng.random(500)]
+    >>> normals = np.array([[np.cos(0.3), np.sin(0.3), 0], [-np.sin(0.3), np.cos(0.3), 0]])
+    >>> T = canonical_pose(pts, normals, np.ones(2))
+    >>> bool(np.allclose(T[:3, :3] @ normals[0], [1, 0, 0]))
+    True
+    """
+    vert = np.abs(normals[:, 2]) < np.sin(np.radians(CANONICAL_VERTICAL))
+    theta = np.arctan2(normals[vert, 1], normals[vert, 0])
+    w = np.asarray(weights, dtype=np.float64)[vert]
+    c, s = float(w @ np.cos(4 * theta)), float(w @ np.sin(4 * theta))
+    if math.hypot(c, s) > 1e-6 * max(float(w.sum()), 1e-300):
+        yaw = math.atan2(s, c) / 4
+    elif len(centers) >= 2:  # no walls: the main axis of the spread
+        evals, evecs = np.linalg.eigh(np.cov(centers[:, :2].T))
+        yaw = math.atan2(evecs[1, -1], evecs[0, -1]) if evals[-1] > evals[0] else 0.0
+    else:
+        yaw = 0.0
+    T = yaw_pose(0.0, 0.0, -yaw)
+    if len(centers):
+        T[:2, 3] = -np.median(centers[:, :2] @ T[:2, :2].T, axis=0)
+    return T
 
 
 def _translation(offset: NDArray[np.float64]) -> NDArray[np.float64]:

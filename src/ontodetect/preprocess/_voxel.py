@@ -150,7 +150,8 @@ def voxelize(
     mask : (n,) bool, optional
         Points to use; the others get voxel -1.
     origin : (3,) float, optional
-        Corner of voxel (0, 0, 0); the minimum corner of the used points by default.
+        Corner of voxel (0, 0, 0); by default the multiple of ``size`` at or below the used
+        points' minimum corner (a grid laid from the frame's origin).
 
     Returns
     -------
@@ -174,7 +175,9 @@ def voxelize(
         raise InvalidParameterError("mask", f"a boolean array of shape ({n},)", use.shape)
     sel = pts if mask is None else pts[use]
     if origin is None:
-        org = sel.min(axis=0) if len(sel) else np.zeros(3)
+        # The grid is laid from the frame's origin (see ``_up.cell_index``), its corner at
+        # the multiple of ``size`` below the points.
+        org = np.floor(sel.min(axis=0) / size) * size if len(sel) else np.zeros(3)
     else:
         org = np.asarray(origin, dtype=np.float64).reshape(3)
     keys = voxel_keys(sel, size, org)
