@@ -423,7 +423,9 @@ def find_ground(
     n = len(xyz)
     if n == 0:
         raise InvalidParameterError("cloud", "a cloud with at least one point", "0 points")
-    origin = local_origin(xyz)
+    # The canonical frame works around the scan's median from the start: the grids laid
+    # from it (voxels, cells) are then the same for the scan moved or turned by a quarter.
+    origin = np.median(xyz, axis=0) if cfg.frame == "canonical" else local_origin(xyz)
     if origin.any():
         xyz = xyz - origin
     clock = _Clock()
@@ -710,6 +712,8 @@ def prepare(
 #: Cells whose normal is within this angle (deg) of horizontal are walls' cells, whose
 #: direction the canonical frame follows.
 CANONICAL_VERTICAL = 10.0
+#: Residuals (deg) within which the walls' cells refine their direction, step by step.
+CANONICAL_REFINE = (5.0, 5.0, 2.0, 2.0)
 
 
 def canonical_pose(
@@ -753,6 +757,14 @@ def canonical_pose(
     c, s = float(w @ np.cos(4 * theta)), float(w @ np.sin(4 * theta))
     if math.hypot(c, s) > 1e-6 * max(float(w.sum()), 1e-300):
         yaw = math.atan2(s, c) / 4
+        # Cells across corners and furniture pull a mean: refine on the cells near the
+        # walls' direction (residuals within CANONICAL_REFINE), whose noise is symmetric.
+        for tol in CANONICAL_REFINE:
+            r = (theta - yaw + math.pi / 4) % (math.pi / 2) - math.pi / 4
+            near = np.abs(r) < math.radians(tol)
+            if not near.any():
+                break
+            yaw += float(np.average(r[near], weights=w[near]))
     elif len(centers) >= 2:  # no walls: the main axis of the spread
         evals, evecs = np.linalg.eigh(np.cov(centers[:, :2].T))
         yaw = math.atan2(evecs[1, -1], evecs[0, -1]) if evals[-1] > evals[0] else 0.0
