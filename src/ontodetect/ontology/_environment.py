@@ -140,23 +140,29 @@ def room_area_likelihood(area: float, *, whole_room: bool = True) -> dict[str, f
 
     Room areas of a category N are log-normal (``areas`` of places205.yaml: the median
     and the 95th percentile, from standards and design guides), ``ln A ~ N(μ_N, σ_N²)``.
-    A scan of a **whole room** (a fused scan walked around it) sees its floor area:
-    the likelihood is that density. A **partial** view (one camera frame) sees a share
-    ``u`` of the floor, unknown, taken uniform on (0, 1) (the least said), so
-    ``ln A_seen = ln A − E`` with ``E ~ Exp(1)``: an exponentially modified normal, whose
-    log-density is ``x − μ + σ²/2 + ln Φ(−(x − μ + σ²)/σ)`` at ``x = ln A_seen``. A small
-    part of a large hall then rules nothing out; 40 m² seen rules out a bathroom either way.
+    Each kind of scan bounds the room's area on one side only:
+
+    - a fused scan walked through the room (``whole_room``) covers at least that room,
+      and maybe more (a flat's kitchen with its living room, an open-plan floor), so the
+      room is at most what was seen: ``P(A_room ≤ A)``, the log-normal's distribution
+      function. A 7 m² scan is no classroom; a 60 m² one may hold a bathroom.
+    - one view (a camera frame, a scanner station) sees a share ``u`` of the room's floor,
+      unknown and taken uniform on (0, 1) (the least said): ``ln A = ln A_room − E`` with
+      ``E ~ Exp(1)``, an exponentially modified normal whose log-density is
+      ``x − μ + σ²/2 + ln Φ(−(x − μ + σ²)/σ)`` at ``x = ln A``. A small part of a large
+      hall rules nothing out; 60 m² seen rules out a bathroom.
 
     Examples
     --------
     >>> small = room_area_likelihood(6.0)
-    >>> round(small["bathroom"], 2), small["classroom"] < 1e-6
+    >>> round(small["kitchenette"], 2), small["classroom"] < 1e-6
     (1.0, True)
-    >>> large = room_area_likelihood(60.0)
-    >>> large["bathroom"] < 1e-6, round(large["classroom"], 2)
-    (True, 1.0)
+    >>> round(room_area_likelihood(60.0)["bathroom"], 2)  # a flat scanned whole
+    1.0
     >>> frame = room_area_likelihood(6.0, whole_room=False)
     >>> frame["classroom"] > 0.05  # a frame may see 6 m² of a classroom
+    True
+    >>> room_area_likelihood(60.0, whole_room=False)["bathroom"] < 1e-3
     True
     """
     from scipy.special import log_ndtr  # lazy: scipy.special is heavy to import
@@ -168,7 +174,7 @@ def room_area_likelihood(area: float, *, whole_room: bool = True) -> dict[str, f
         mu = math.log(float(a["median"]))
         sigma = (math.log(float(a["p95"])) - mu) / _Z95
         if whole_room:
-            logs[name] = -0.5 * ((x - mu) / sigma) ** 2 - math.log(sigma)
+            logs[name] = float(log_ndtr((x - mu) / sigma))
         else:
             logs[name] = x - mu + sigma**2 / 2 + float(log_ndtr(-(x - mu + sigma**2) / sigma))
     top = max(logs.values())
