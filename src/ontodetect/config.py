@@ -369,6 +369,15 @@ class PlaneConfig(_Section):
     max_trials: int = _param(
         1000, Interval(1, 10**7, "both", integer=True), "MSAC hypotheses per plane."
     )
+    # Random minimal samples settle on any plane whose cost is within their sampling noise:
+    # a seat found whole or in part, a backrest or not, and a detection with it. Planes
+    # along the surface's own normals, refined to convergence, are the same every time.
+    hypotheses: str = _param(
+        "surface",
+        OneOf(("surface", "random")),
+        "Plane hypotheses: 'surface' (through the most planar points along their normals; "
+        "deterministic) or 'random' (MSAC's random triples, Table 4.1).",
+    )
 
 
 @dataclass(frozen=True)
