@@ -425,7 +425,8 @@ def find_ground(
         raise InvalidParameterError("cloud", "a cloud with at least one point", "0 points")
     # The canonical frame works around the scan's median from the start: the grids laid
     # from it (voxels, cells) are then the same for the scan moved or turned by a quarter.
-    origin = np.median(xyz, axis=0) if cfg.frame == "canonical" else local_origin(xyz)
+    canonical = cfg.frame == "canonical"
+    origin = np.median(xyz, axis=0) if canonical else local_origin(xyz)
     if origin.any():
         xyz = xyz - origin
     clock = _Clock()
@@ -449,7 +450,7 @@ def find_ground(
             raise InvalidParameterError(
                 "cloud", "a cloud that keeps points after denoising", f"all {n} points removed"
             )
-        grid = voxelize(scaled, cfg.voxel_size, colors, mask=far)
+        grid = voxelize(scaled, cfg.voxel_size, colors, mask=far, anchored=canonical)
         keep = denoise(
             grid.centers,
             voxel_size=DENOISE_GRID_FACTOR * cfg.voxel_size,
@@ -459,6 +460,7 @@ def find_ground(
             radius=cfg.ror_radius,
             min_neighbors=cfg.ror_min_neighbors,
             far_margin=np.inf,
+            anchored=canonical,
         )
         if not keep.any():
             raise InvalidParameterError(
@@ -476,7 +478,7 @@ def find_ground(
     confidence = 1.0
     if plane is not None:
         u = as_direction(plane.up)
-        cells = cell_planes(grid.centers, cell)
+        cells = cell_planes(grid.centers, cell, anchored=canonical)
         offset = k_s * (float(plane.height) - float(u @ origin))
         floor = FloorFit(u, offset, float(plane.area), True)
     else:
@@ -485,7 +487,7 @@ def find_ground(
             u, confidence = estimate_up(grid.centers, hint=hint, cell=cell, max_angle=max_angle)
         else:
             u = as_direction(up_choice)
-        cells = cell_planes(grid.centers, cell)
+        cells = cell_planes(grid.centers, cell, anchored=canonical)
         floor = find_floor(
             grid.centers,
             u,
@@ -610,14 +612,16 @@ def prepare(
     levelled_xyz = xyz @ to_level[:3, :3].T + shift
     # Plane fits of the levelled scene: the same cells shifted when only translated.
     if rotated:
-        cells = cell_planes(grid.centers @ R.T + shift, cell)
+        cells = cell_planes(grid.centers @ R.T + shift, cell, anchored=canonical)
     else:
         cells = CellPlanes(
             cells.centers + shift, cells.normals, cells.counts, cells.planar, cells.cell
         )
     floor_map = None
     if cfg.floor_tile > 0 and cfg.max_floor_warp > 0 and floor.found:
-        floor_map = floor_height_map(cells, tile=cfg.floor_tile, max_warp=cfg.max_floor_warp)
+        floor_map = floor_height_map(
+            cells, tile=cfg.floor_tile, max_warp=cfg.max_floor_warp, anchored=canonical
+        )
         if floor_map.warp < FLAT_FLOOR:
             floor_map = None
     if floor_map is not None:
@@ -627,7 +631,7 @@ def prepare(
         cells = CellPlanes(cc, cells.normals, cells.counts, cells.planar, cells.cell)
     if rotated or floor_map is not None:
         # Voxels of the final frame, so that every point lies in the voxel it maps to.
-        grid = voxelize(levelled_xyz, cfg.voxel_size, colors, mask=inliers)
+        grid = voxelize(levelled_xyz, cfg.voxel_size, colors, mask=inliers, anchored=canonical)
     else:
         # A translation moves the grid with the points: the same voxels, shifted.
         grid = VoxelGrid(
@@ -659,7 +663,7 @@ def prepare(
     # -- structure and the search volume -------------------------------------------------
     centers = grid.centers
     if cfg.structure:
-        lcells = cells if cells is not None else cell_planes(centers, cell)
+        lcells = cells if cells is not None else cell_planes(centers, cell, anchored=canonical)
         labels, planes = find_structure(
             centers,
             lcells,
