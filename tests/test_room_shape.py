@@ -137,12 +137,17 @@ def test_shape_is_one_more_factor_of_the_room_estimate():
     assert only["bathroom"] < 1e-3 < only["classroom"]
 
 
+def test_the_room_shape_is_off_by_default():
+    assert Config().detect.room_shape is False
+
+
 @pytest.mark.slow
 def test_detect_records_the_floor_area_it_used():
     """A bathroom walked around with an RGB-D camera: its floor area is measured, and with
     its WC and basin it makes the room a bathroom."""
     scan = synthesize("bathroom", "rgbd", seed=0, points=40_000)
-    result = detect(scan.cloud, config=Config().with_overrides(["detect.votes=1"]), seed=0)
+    config = Config().with_overrides(["detect.votes=1", "detect.room_shape=true"])
+    result = detect(scan.cloud, config=config, seed=0)
     env = result.environment
     assert env["source"] == "scan" and env["whole_room"] is True
     length, width = scan.scene.size[:2]

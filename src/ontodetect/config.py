@@ -421,6 +421,14 @@ class DetectConfig(_Section):
         "Classes reported: 'reported' (the ontology's detect: true), 'all' (the competing "
         "classes too) or a comma-separated list of class names.",
     )
+    # With the room prior estimated from the scan (detect's room="auto"), the floor area the
+    # scan covers is one more piece of evidence about the room (docs/environment.md). Off by
+    # default: on scannet-dev it dropped one true table of a studio flat (with one false).
+    room_shape: bool = _param(
+        False,
+        Boolean(),
+        "Room prior from the scan: also weigh the floor area it covers (areas per category).",
+    )
     # Issue 20, opt-in: "recognition" makes many candidate objects from an over-segmentation,
     # scores every one and keeps the best non-overlapping set (no vote).
     proposals: str = _param(

@@ -185,9 +185,7 @@ def detect(
         # A first labelling, every class competing and no prior, says what the room holds:
         # P_N from it (and from photographs, when given), then every pass with its priors.
         first = _one_pass(scan, config, shared)
-        area = floor_area(first[0].prepared.voxels.centers)
-        whole = eye is None and pixel_grid(cloud) is None  # a fused scan, not one view
-        shape = room_area_likelihood(area, whole_room=whole) if area > 0 else None
+        shape, area_seen = _room_shape(first[0], cloud, eye) if d.room_shape else (None, {})
         rooms = rooms_from_objects(_found_objects(first[2], first[1]), ontology, shape=shape)
         if scene_rooms is not None:
             from ..environment import combine_room_priors  # lazy: only with photographs
@@ -198,8 +196,7 @@ def detect(
         environment = {
             "source": "scan+images" if scene_rooms else "scan",
             "rooms": rooms,
-            "floor_area": round(area, 2),
-            "whole_room": whole,
+            **area_seen,
         }
     if workers:
         with ProcessPoolExecutor(max_workers=workers, mp_context=fork_context()) as pool:
@@ -224,6 +221,21 @@ def detect(
         timings=timings,
         environment=environment,
     )
+
+
+def _room_shape(
+    seg: Segmentation, cloud: PointCloud, eye: NDArray[np.float64] | None
+) -> tuple[dict[str, float] | None, dict[str, Any]]:
+    """The likelihood of each room category from the floor area a pass's scene covers
+    (``detect.room_shape``), and what ``detections.json`` records of it."""
+    area = floor_area(seg.prepared.voxels.centers)
+    whole = eye is None and pixel_grid(cloud) is None  # a fused scan, not one view
+    if area <= 0:
+        return None, {}
+    return room_area_likelihood(area, whole_room=whole), {
+        "floor_area": round(area, 2),
+        "whole_room": whole,
+    }
 
 
 def _environment_given(
