@@ -122,9 +122,13 @@ def as_direction(up: str | ArrayLike) -> NDArray[np.float64]:
     return unit_direction(up)
 
 
-def cell_index(points: ArrayLike, cell: float) -> tuple[NDArray[np.int64], int]:
-    """Cell of every point on a grid of edge ``cell`` from the points' minimum corner, and
-    the number of occupied cells; cells are numbered in increasing (x, y, z) order, as
+def cell_index(
+    points: ArrayLike, cell: float, *, anchored: bool = False
+) -> tuple[NDArray[np.int64], int]:
+    """Cell of every point on a grid of edge ``cell`` from the points' minimum corner (or,
+    ``anchored``, from the frame's origin: cells ``[k·cell, (k+1)·cell)``, the same for
+    the points moved by whole cells or turned by a quarter about the origin), and the
+    number of occupied cells; cells are numbered in increasing (x, y, z) order, as
     :func:`ontodetect.preprocess.voxelize` numbers its voxels.
 
     Examples
@@ -138,14 +142,18 @@ def cell_index(points: ArrayLike, cell: float) -> tuple[NDArray[np.int64], int]:
         raise InvalidParameterError("cell", "a number > 0", cell)
     if len(pts) == 0:
         return np.zeros(0, dtype=np.int64), 0
-    keys = np.floor((pts - pts.min(axis=0)) / cell).astype(np.int64)
+    if anchored:
+        keys = np.floor(pts / cell).astype(np.int64)
+        keys -= keys.min(axis=0)
+    else:
+        keys = np.floor((pts - pts.min(axis=0)) / cell).astype(np.int64)
     code = np.ravel_multi_index(keys.T, keys.max(axis=0) + 1)
     _, inverse = np.unique(code, return_inverse=True)
     inverse = inverse.reshape(-1).astype(np.int64)
     return inverse, int(inverse.max()) + 1
 
 
-def cell_planes(points: ArrayLike, cell: float = 0.1) -> CellPlanes:
+def cell_planes(points: ArrayLike, cell: float = 0.1, *, anchored: bool = False) -> CellPlanes:
     """Fit a plane in every cell of a grid of edge ``cell``.
 
     Examples
@@ -157,7 +165,7 @@ def cell_planes(points: ArrayLike, cell: float = 0.1) -> CellPlanes:
     (True, np.True_)
     """
     pts = np.asarray(points, dtype=np.float64)
-    groups, num = cell_index(pts, cell)
+    groups, num = cell_index(pts, cell, anchored=anchored)
     means, cov, counts = grouped_covariance(pts, groups, num)
     evals, evecs = np.linalg.eigh(cov)
     normals = evecs[:, :, 0]

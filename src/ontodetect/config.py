@@ -205,6 +205,18 @@ class PrepareConfig(_Section):
     level_on_floor: bool = _param(
         True, Boolean(), "Refine the up direction with the floor plane's normal."
     )
+    # Grids (voxels, cells, floor tiles) are laid along the levelled frame's axes from the
+    # points' minimum corner. "canonical" turns that frame about the vertical so that the
+    # walls' main direction is its x axis, puts its origin at the median of the scan and lays
+    # every grid from that origin: the same room then meets the same grids however its file
+    # turned or moved it. Opt-in: on scannet-dev it changed clusters and cost tables
+    # (docs/benchmarks.md, "Where detections move").
+    frame: str = _param(
+        "input",
+        OneOf(("canonical", "input")),
+        "Horizontal frame of the grids: 'canonical' (walls along x, origin at the scan's "
+        "median) or 'input' (the file's axes).",
+    )
     # The voxel grid and the cells are laid along the levelled frame's axes; a turn about
     # the vertical shows the same scan to them from another angle (detect's votes).
     turn: float = _param(
@@ -357,6 +369,16 @@ class PlaneConfig(_Section):
     )
     max_trials: int = _param(
         1000, Interval(1, 10**7, "both", integer=True), "MSAC hypotheses per plane."
+    )
+    # Random minimal samples settle on any plane whose cost is within their sampling noise
+    # (a seat found whole or in part, a backrest or not), and a detection with it: on
+    # scannet-dev another seed loses 2 of 7 detections of a room. "surface" hypotheses are
+    # the same every time. Opt-in until the benchmark says it costs nothing.
+    hypotheses: str = _param(
+        "random",
+        OneOf(("surface", "random")),
+        "Plane hypotheses: 'surface' (through the most planar points along their normals; "
+        "deterministic) or 'random' (MSAC's random triples, Table 4.1).",
     )
 
 

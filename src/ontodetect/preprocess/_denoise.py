@@ -139,8 +139,10 @@ def denoise(
     min_neighbors: int = 2,
     far_percentile: float = 0.5,
     far_margin: float = 1.0,
+    anchored: bool = False,
 ) -> NDArray[np.bool_]:
-    """Points to keep after far-outlier removal and outlier removal on the voxel grid.
+    """Points to keep after far-outlier removal and outlier removal on the voxel grid
+    (laid from the frame's origin when ``anchored``, see :func:`voxelize`).
 
     Parameters
     ----------
@@ -181,7 +183,7 @@ def denoise(
     )
     if method == "none" or not keep.any():
         return keep
-    grid = voxelize(pts, voxel_size, mask=keep)
+    grid = voxelize(pts, voxel_size, mask=keep, anchored=anchored)
     good = np.ones(len(grid), dtype=bool)
     if method in ("statistical", "both"):
         good &= statistical_outlier_mask(grid.centers, neighbors, std_ratio)

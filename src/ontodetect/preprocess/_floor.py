@@ -78,7 +78,9 @@ class FloorMap:
         }
 
 
-def floor_height_map(cells: CellPlanes, *, tile: float = 0.5, max_warp: float = 0.3) -> FloorMap:
+def floor_height_map(
+    cells: CellPlanes, *, tile: float = 0.5, max_warp: float = 0.3, anchored: bool = False
+) -> FloorMap:
     """Estimate the floor height under every tile of a levelled scene.
 
     Parameters
@@ -112,6 +114,8 @@ def floor_height_map(cells: CellPlanes, *, tile: float = 0.5, max_warp: float = 
     ok &= np.abs(cells.centers[:, 2]) <= max_warp
     ctr = cells.centers
     lo = ctr[:, :2].min(axis=0) if len(ctr) else np.zeros(2)
+    if anchored:  # tiles laid from the frame's origin (prepare.frame: canonical)
+        lo = np.floor(lo / tile) * tile
     hi = ctr[:, :2].max(axis=0) if len(ctr) else np.zeros(2)
     shape = tuple(int(v) for v in np.floor((hi - lo) / tile).astype(np.int64) + 1)
     origin = lo + tile / 2

@@ -423,7 +423,10 @@ def find_ground(
     n = len(xyz)
     if n == 0:
         raise InvalidParameterError("cloud", "a cloud with at least one point", "0 points")
-    origin = local_origin(xyz)
+    # The canonical frame works around the scan's median from the start: the grids laid
+    # from it (voxels, cells) are then the same for the scan moved or turned by a quarter.
+    canonical = cfg.frame == "canonical"
+    origin = np.median(xyz, axis=0) if canonical else local_origin(xyz)
     if origin.any():
         xyz = xyz - origin
     clock = _Clock()
@@ -447,7 +450,7 @@ def find_ground(
             raise InvalidParameterError(
                 "cloud", "a cloud that keeps points after denoising", f"all {n} points removed"
             )
-        grid = voxelize(scaled, cfg.voxel_size, colors, mask=far)
+        grid = voxelize(scaled, cfg.voxel_size, colors, mask=far, anchored=canonical)
         keep = denoise(
             grid.centers,
             voxel_size=DENOISE_GRID_FACTOR * cfg.voxel_size,
@@ -457,6 +460,7 @@ def find_ground(
             radius=cfg.ror_radius,
             min_neighbors=cfg.ror_min_neighbors,
             far_margin=np.inf,
+            anchored=canonical,
         )
         if not keep.any():
             raise InvalidParameterError(
@@ -474,7 +478,7 @@ def find_ground(
     confidence = 1.0
     if plane is not None:
         u = as_direction(plane.up)
-        cells = cell_planes(grid.centers, cell)
+        cells = cell_planes(grid.centers, cell, anchored=canonical)
         offset = k_s * (float(plane.height) - float(u @ origin))
         floor = FloorFit(u, offset, float(plane.area), True)
     else:
@@ -483,7 +487,7 @@ def find_ground(
             u, confidence = estimate_up(grid.centers, hint=hint, cell=cell, max_angle=max_angle)
         else:
             u = as_direction(up_choice)
-        cells = cell_planes(grid.centers, cell)
+        cells = cell_planes(grid.centers, cell, anchored=canonical)
         floor = find_floor(
             grid.centers,
             u,
@@ -587,22 +591,37 @@ def prepare(
     grid, inliers, spacing, cell = ground.voxels, ground.inliers, ground.spacing, ground.cell
     confidence, cells, floor = ground.up_confidence, ground.cells, ground.floor
     to_level = level_transform(floor.normal, floor.offset, k_s)
+    canonical = cfg.frame == "canonical"
+    if canonical:
+        R = to_level[:3, :3] / k_s
+        planar = cells.planar
+        to_level = (
+            canonical_pose(
+                grid.centers @ R.T + to_level[:3, 3],
+                cells.normals[planar] @ R.T,
+                cells.counts[planar],
+            )
+            @ to_level
+        )
     if cfg.turn:
         to_level = yaw_pose(0.0, 0.0, math.radians(cfg.turn)) @ to_level
     R = to_level[:3, :3] / k_s
     shift = to_level[:3, 3]
-    rotated = float(np.linalg.norm(R - np.eye(3))) > IDENTITY_TOLERANCE
+    # The canonical frame lays the grids anew from its origin, even when it only moves.
+    rotated = canonical or float(np.linalg.norm(R - np.eye(3))) > IDENTITY_TOLERANCE
     levelled_xyz = xyz @ to_level[:3, :3].T + shift
     # Plane fits of the levelled scene: the same cells shifted when only translated.
     if rotated:
-        cells = cell_planes(grid.centers @ R.T + shift, cell)
+        cells = cell_planes(grid.centers @ R.T + shift, cell, anchored=canonical)
     else:
         cells = CellPlanes(
             cells.centers + shift, cells.normals, cells.counts, cells.planar, cells.cell
         )
     floor_map = None
     if cfg.floor_tile > 0 and cfg.max_floor_warp > 0 and floor.found:
-        floor_map = floor_height_map(cells, tile=cfg.floor_tile, max_warp=cfg.max_floor_warp)
+        floor_map = floor_height_map(
+            cells, tile=cfg.floor_tile, max_warp=cfg.max_floor_warp, anchored=canonical
+        )
         if floor_map.warp < FLAT_FLOOR:
             floor_map = None
     if floor_map is not None:
@@ -612,7 +631,7 @@ def prepare(
         cells = CellPlanes(cc, cells.normals, cells.counts, cells.planar, cells.cell)
     if rotated or floor_map is not None:
         # Voxels of the final frame, so that every point lies in the voxel it maps to.
-        grid = voxelize(levelled_xyz, cfg.voxel_size, colors, mask=inliers)
+        grid = voxelize(levelled_xyz, cfg.voxel_size, colors, mask=inliers, anchored=canonical)
     else:
         # A translation moves the grid with the points: the same voxels, shifted.
         grid = VoxelGrid(
@@ -644,7 +663,7 @@ def prepare(
     # -- structure and the search volume -------------------------------------------------
     centers = grid.centers
     if cfg.structure:
-        lcells = cells if cells is not None else cell_planes(centers, cell)
+        lcells = cells if cells is not None else cell_planes(centers, cell, anchored=canonical)
         labels, planes = find_structure(
             centers,
             lcells,
@@ -692,6 +711,73 @@ def prepare(
             "timings": clock.laps,
         },
     )
+
+
+#: Cells whose normal is within this angle (deg) of horizontal are walls' cells, whose
+#: direction the canonical frame follows.
+CANONICAL_VERTICAL = 10.0
+#: Residuals (deg) within which the walls' cells refine their direction, step by step.
+CANONICAL_REFINE = (5.0, 5.0, 2.0, 2.0)
+
+
+def canonical_pose(
+    centers: NDArray[np.float64], normals: NDArray[np.float64], weights: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """The turn about the vertical and the shift in the floor plane that put a levelled
+    scan in its canonical frame (``prepare.frame: canonical``): the walls' main direction
+    along x, the median of its points at the origin.
+
+    The walls' direction is the circular mean of four times the azimuths of the vertical
+    cells' normals (weighted by their points), so that walls at right angles agree (a
+    Manhattan room) and a turn by any angle turns it by the same angle; without walls,
+    the main axis of the points' spread. The median, unlike the minimum corner, moves
+    little when points are dropped or jittered. A scan turned by any angle and moved then
+    meets the same grids, up to a quarter turn about the origin, which every grid laid
+    from the origin (``_up.cell_index``, :func:`voxelize`) maps onto itself.
+
+    Parameters
+    ----------
+    centers : (m, 3) float
+        Points (or voxel centres) in the levelled frame.
+    normals : (g, 3) float and weights : (g,) float
+        Normals of planar cells in the levelled frame, and their weights.
+
+    Returns
+    -------
+    (4, 4) float
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> pts = np.c_[rng.random((500, 2)) * [4, 2] + 10, rng.random(500)]
+    >>> normals = np.array([[np.cos(0.3), np.sin(0.3), 0], [-np.sin(0.3), np.cos(0.3), 0]])
+    >>> T = canonical_pose(pts, normals, np.ones(2))
+    >>> bool(np.allclose(T[:3, :3] @ normals[0], [1, 0, 0]))
+    True
+    """
+    vert = np.abs(normals[:, 2]) < np.sin(np.radians(CANONICAL_VERTICAL))
+    theta = np.arctan2(normals[vert, 1], normals[vert, 0])
+    w = np.asarray(weights, dtype=np.float64)[vert]
+    c, s = float(w @ np.cos(4 * theta)), float(w @ np.sin(4 * theta))
+    if math.hypot(c, s) > 1e-6 * max(float(w.sum()), 1e-300):
+        yaw = math.atan2(s, c) / 4
+        # Cells across corners and furniture pull a mean: refine on the cells near the
+        # walls' direction (residuals within CANONICAL_REFINE), whose noise is symmetric.
+        for tol in CANONICAL_REFINE:
+            r = (theta - yaw + math.pi / 4) % (math.pi / 2) - math.pi / 4
+            near = np.abs(r) < math.radians(tol)
+            if not near.any():
+                break
+            yaw += float(np.average(r[near], weights=w[near]))
+    elif len(centers) >= 2:  # no walls: the main axis of the spread
+        evals, evecs = np.linalg.eigh(np.cov(centers[:, :2].T))
+        yaw = math.atan2(evecs[1, -1], evecs[0, -1]) if evals[-1] > evals[0] else 0.0
+    else:
+        yaw = 0.0
+    T = yaw_pose(0.0, 0.0, -yaw)
+    if len(centers):
+        T[:2, 3] = -np.median(centers[:, :2] @ T[:2, :2].T, axis=0)
+    return T
 
 
 def _translation(offset: NDArray[np.float64]) -> NDArray[np.float64]:

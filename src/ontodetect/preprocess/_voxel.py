@@ -136,6 +136,7 @@ def voxelize(
     *,
     mask: ArrayLike | None = None,
     origin: ArrayLike | None = None,
+    anchored: bool = False,
 ) -> VoxelGrid:
     """Group points into cubic voxels and average each voxel (thesis §3.3, Alg. 1 step 3).
 
@@ -151,6 +152,11 @@ def voxelize(
         Points to use; the others get voxel -1.
     origin : (3,) float, optional
         Corner of voxel (0, 0, 0); the minimum corner of the used points by default.
+    anchored : bool
+        Without ``origin``: lay the grid from the frame's origin (its corner at the
+        multiple of ``size`` at or below the minimum corner), so that the same points
+        moved by whole voxels, or turned by a quarter about the origin, fall in the same
+        voxels (``prepare.frame: canonical``).
 
     Returns
     -------
@@ -175,6 +181,8 @@ def voxelize(
     sel = pts if mask is None else pts[use]
     if origin is None:
         org = sel.min(axis=0) if len(sel) else np.zeros(3)
+        if anchored:
+            org = np.floor(org / size) * size
     else:
         org = np.asarray(origin, dtype=np.float64).reshape(3)
     keys = voxel_keys(sel, size, org)

@@ -530,6 +530,9 @@ def _build_cluster(
     surface = len(vox) * prepared.spacing**2
     # Clusters flagged too small get no planes: nothing will be made of them.
     if fit_planes and surface >= cc.min_surface:
+        normals = variation = None
+        if pc.hypotheses == "surface" and len(pts) > 1:
+            normals, variation = graph_normals(pts, radius_graph(pts, radius))
         planes = extract_planes(
             pts,
             cols,
@@ -541,6 +544,8 @@ def _build_cluster(
             floor_z=0.0,
             connectivity=radius,
             rng=rng,
+            normals=normals,
+            variation=variation,
         )
         relations = plane_relations(pts, planes) if len(planes) > 1 else []
     flags = _flags(surface, box, planes if fit_planes else None, cc)

@@ -66,6 +66,11 @@ SCORE_SUBSET = 2048
 VERIFY_PER_BATCH = 4
 #: Least-squares refinements (re-selecting the inliers each time) after the sampling.
 REFINE_ITERATIONS = 3
+#: :func:`local_plane`: at most this many hypotheses, the most planar neighbourhoods ...
+LOCAL_HYPOTHESES = 256
+#: ... and least-squares refinement on the inliers until they no longer change (at most
+#: this many times).
+LOCAL_REFINE = 50
 #: Size of a minimal sample for a plane.
 SAMPLE_SIZE = 3
 
@@ -571,6 +576,98 @@ def msac(
     return MsacResult(model, _readonly(inliers), best_cost, trials)
 
 
+def local_plane(
+    points: ArrayLike,
+    normals: ArrayLike,
+    variation: ArrayLike,
+    *,
+    threshold: float,
+    min_inliers: int = 3,
+) -> MsacResult:
+    """Fit one plane with MSAC's cost, from hypotheses the surface itself gives.
+
+    Instead of planes through random triples of points, the hypotheses are the planes
+    through the :data:`LOCAL_HYPOTHESES` most planar points along their local normals
+    (least surface ``variation`` first, ties by position). The one of least truncated
+    quadratic cost ``sum(min(r², t²))`` is refined by least squares on its inliers until
+    they no longer change: the cost never grows on the way, and the plane reached is
+    the same from any hypothesis in its basin. No random draw: the same surface gives
+    the same plane, and a surface moved by a fraction of a millimetre the same plane
+    moved with it, where random samples would settle on any of the planes whose cost is
+    within their sampling noise (a seat found whole or in part, a backrest or not).
+
+    Parameters
+    ----------
+    points : (n, 3) float
+    normals : (n, 3) float
+        Unit local normals (e.g. ``ontodetect.preprocess.graph_normals``).
+    variation : (n,) float
+        Surface variation of each point's neighbourhood (0: flat).
+    threshold : float
+        Inlier distance ``t`` (> 0).
+    min_inliers : int
+        Fewest inliers (>= 3) for the plane to count as found.
+
+    Returns
+    -------
+    MsacResult
+        As :func:`msac` (``trials`` is the number of hypotheses scored).
+
+    Examples
+    --------
+    >>> gen = np.random.default_rng(0)
+    >>> xy = gen.uniform(-1, 1, (400, 2))
+    >>> pts = np.column_stack([xy, 0.5 + 0.002 * gen.standard_normal(400)])
+    >>> pts[:20, 2] += 0.3
+    >>> up = np.tile([0.0, 0.0, 1.0], (400, 1))
+    >>> found = local_plane(pts, up, np.zeros(400), threshold=0.01)
+    >>> round(found.model.offset, 2), found.inliers.size
+    (-0.5, 380)
+    """
+    pts = _as_points(points)
+    t = _positive("threshold", threshold)
+    min_inliers = _integer("min_inliers", min_inliers, SAMPLE_SIZE)
+    n = len(pts)
+    nrm = np.asarray(normals, dtype=np.float64).reshape(n, 3)
+    var = np.asarray(variation, dtype=np.float64).reshape(n)
+    if n < SAMPLE_SIZE:
+        return _failure(f"fewer than 3 points (got {n})")
+    if n < min_inliers:
+        return _failure(f"fewer points ({n}) than min_inliers={min_inliers}")
+    shift = _col_mean(pts)
+    centered = pts - shift
+    order = np.lexsort((np.arange(n), var))
+    cand = order[:LOCAL_HYPOTHESES]
+    cn = nrm[cand]
+    offsets = -np.einsum("ij,ij->i", cn, centered[cand])
+    t2 = t * t
+    costs = _costs(centered, cn, offsets, t2)
+    k = int(np.argmin(costs))
+    normal, offset, best = cn[k], float(offsets[k]), float(costs[k])
+    r = centered @ normal + offset
+    inside = np.abs(r) <= t
+    for _ in range(LOCAL_REFINE):
+        refined = PlaneModel.from_estimate(centered[inside])
+        if refined is None:
+            break
+        r_new = centered @ refined.normal + refined.offset
+        cost = float(np.minimum(r_new * r_new, t2).sum())
+        if cost > best:
+            break
+        normal, offset, best, r = refined.normal, refined.offset, cost, r_new
+        previous, inside = inside, np.abs(r) <= t
+        if np.array_equal(inside, previous):
+            break
+    inliers = np.flatnonzero(np.abs(r) <= t)
+    if inliers.size < min_inliers:
+        return _failure(
+            f"the best plane has {inliers.size} inliers, fewer than min_inliers={min_inliers}",
+            len(cand),
+        )
+    model = PlaneModel(np.asarray(normal, dtype=np.float64), offset - float(normal @ shift))
+    return MsacResult(model, _readonly(inliers), best, len(cand))
+
+
 # -- plane features --------------------------------------------------------------------------
 
 
@@ -867,6 +964,8 @@ def extract_planes(
     floor_z: float = 0.0,
     area_cell: float | None = None,
     rng: int | np.random.Generator | None = None,
+    normals: ArrayLike | None = None,
+    variation: ArrayLike | None = None,
 ) -> list[Plane]:
     """Extract the planes of a cluster one after the other with MSAC.
 
@@ -906,6 +1005,10 @@ def extract_planes(
         of the plane.
     rng : int or numpy.random.Generator, optional
         Seed or generator; the same points and seed give the same planes.
+    normals, variation : (n, 3) and (n,) float, optional
+        Local normals and surface variation of the points: with them, each plane is
+        found by :func:`local_plane` (hypotheses from the surface, no random draw)
+        instead of :func:`msac`.
 
     Returns
     -------
@@ -957,6 +1060,13 @@ def extract_planes(
                 "colors", f"an ({n}, 3) array like the points", f"shape {rgb.shape}"
             )
     gen = np.random.default_rng(rng)
+    if normals is not None:
+        nrm = np.asarray(normals, dtype=np.float64)
+        var = np.zeros(n) if variation is None else np.asarray(variation, dtype=np.float64)
+        if nrm.shape != (n, 3) or var.shape != (n,):
+            raise InvalidParameterError(
+                "normals", f"({n}, 3) normals and ({n},) variation", f"shape {nrm.shape}"
+            )
 
     planes: list[Plane] = []
     if n == 0:
@@ -966,13 +1076,22 @@ def extract_planes(
     rejections = 0
     with progress("Extracting planes", total=max_planes) as advance:
         while len(planes) < max_planes and active.size >= min_points:
-            found = msac(
-                pts[active],
-                threshold=threshold,
-                max_trials=max_trials,
-                min_inliers=min_points,
-                rng=gen,
-            )
+            if normals is not None:
+                found = local_plane(
+                    pts[active],
+                    nrm[active],
+                    var[active],
+                    threshold=threshold,
+                    min_inliers=min_points,
+                )
+            else:
+                found = msac(
+                    pts[active],
+                    threshold=threshold,
+                    max_trials=max_trials,
+                    min_inliers=min_points,
+                    rng=gen,
+                )
             if not found:
                 break
             taken = found.inliers  # positions in ``active``
