@@ -550,22 +550,9 @@ def msac(
     if best_normal is None:
         return _failure(f"no non-degenerate sample of 3 points in {trials} trials", trials)
 
-    # Least-squares refinement on the inliers, kept only while the MSAC cost decreases.
-    r = centered @ best_normal + best_offset
-    inside = np.abs(r) <= t
-    for _ in range(REFINE_ITERATIONS):
-        refined = PlaneModel.from_estimate(centered[inside])
-        if refined is None:
-            break
-        r_new = centered @ refined.normal + refined.offset
-        cost = float(np.minimum(r_new * r_new, t2).sum())
-        if cost >= best_cost:
-            break
-        best_normal, best_offset, best_cost, r = refined.normal, refined.offset, cost, r_new
-        previous, inside = inside, np.abs(r) <= t
-        if np.array_equal(inside, previous):
-            break  # the same inliers give the same fit
-
+    best_normal, best_offset, best_cost, r = _refine(
+        centered, best_normal, best_offset, best_cost, t, REFINE_ITERATIONS
+    )
     inliers = np.flatnonzero(np.abs(r) <= t)
     if inliers.size < min_inliers:
         return _failure(
@@ -574,6 +561,35 @@ def msac(
         )
     model = PlaneModel(best_normal, best_offset - float(best_normal @ shift))
     return MsacResult(model, _readonly(inliers), best_cost, trials)
+
+
+def _refine(
+    centered: NDArray[np.float64],
+    normal: NDArray[np.float64],
+    offset: float,
+    cost: float,
+    t: float,
+    iterations: int,
+) -> tuple[NDArray[np.float64], float, float, NDArray[np.float64]]:
+    """Least-squares refinement of a plane on its inliers, kept only while the truncated
+    cost decreases, stopping when the inliers no longer change: the plane, its cost and
+    the residuals of every point."""
+    t2 = t * t
+    r = centered @ normal + offset
+    inside = np.abs(r) <= t
+    for _ in range(iterations):
+        refined = PlaneModel.from_estimate(centered[inside])
+        if refined is None:
+            break
+        r_new = centered @ refined.normal + refined.offset
+        new_cost = float(np.minimum(r_new * r_new, t2).sum())
+        if new_cost >= cost:
+            break
+        normal, offset, cost, r = refined.normal, refined.offset, new_cost, r_new
+        previous, inside = inside, np.abs(r) <= t
+        if np.array_equal(inside, previous):
+            break  # the same inliers give the same fit
+    return normal, offset, cost, r
 
 
 def local_plane(
@@ -643,21 +659,9 @@ def local_plane(
     t2 = t * t
     costs = _costs(centered, cn, offsets, t2)
     k = int(np.argmin(costs))
-    normal, offset, best = cn[k], float(offsets[k]), float(costs[k])
-    r = centered @ normal + offset
-    inside = np.abs(r) <= t
-    for _ in range(LOCAL_REFINE):
-        refined = PlaneModel.from_estimate(centered[inside])
-        if refined is None:
-            break
-        r_new = centered @ refined.normal + refined.offset
-        cost = float(np.minimum(r_new * r_new, t2).sum())
-        if cost > best:
-            break
-        normal, offset, best, r = refined.normal, refined.offset, cost, r_new
-        previous, inside = inside, np.abs(r) <= t
-        if np.array_equal(inside, previous):
-            break
+    normal, offset, best, r = _refine(
+        centered, cn[k], float(offsets[k]), float(costs[k]), t, LOCAL_REFINE
+    )
     inliers = np.flatnonzero(np.abs(r) <= t)
     if inliers.size < min_inliers:
         return _failure(
