@@ -53,3 +53,22 @@ def planes(pc, labels: np.ndarray) -> int:
             found += 1
             rest = rest.select_by_index(inl, invert=True)
     return found
+
+
+def main(argv: list[str] | None = None) -> None:
+    """``python -m benchmarks._open3d_recipe SCAN``: read a scan and run the recipe on it, as
+    a whole process (the end-to-end comparison of ``python -m benchmarks detect --cli``)."""
+    import sys
+
+    import open3d as o3d
+
+    from ontodetect.io import read_cloud
+
+    (path,) = sys.argv[1:] if argv is None else argv
+    xyz = np.array(read_cloud(path).xyz)  # Open3D wants a writeable copy
+    pc, labels = cluster(o3d.geometry.PointCloud(o3d.utility.Vector3dVector(xyz)))
+    print(f"{int(labels.max()) + 1 if labels.size else 0} clusters, {planes(pc, labels)} planes")
+
+
+if __name__ == "__main__":
+    main()

@@ -67,6 +67,19 @@ def test_labelled_ply_keeps_input_fields_and_adds_scalar_ones(result, written):
         assert f"ontodetect label {i} {name}" in comments
 
 
+def test_labelled_colours_do_not_depend_on_the_block_size(result, monkeypatch):
+    # The colours are computed block by block to bound memory: any block size, the same
+    # colours, block boundaries included.
+    import ontodetect.outputs
+
+    whole = labelled_cloud(result).rgb
+    monkeypatch.setattr(ontodetect.outputs, "COLOR_BLOCK", 7)
+    np.testing.assert_array_equal(labelled_cloud(result).rgb, whole)
+    label, _ = result.point_labels()
+    for i, name in enumerate(result.class_names):
+        assert np.all(whole[label == i] == _rgb255(name))
+
+
 def test_labelled_ply_opens_in_open3d_coloured_by_class(result, written):
     o3d = pytest.importorskip("open3d")
     out, _ = written

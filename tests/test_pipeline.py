@@ -247,6 +247,19 @@ def test_votes_keep_detections_in_the_input_frame(dining):
     assert set(np.unique(instance)) == {0, *(d.id for d in three.detections)}
 
 
+def test_a_failed_first_labelling_stops_the_vote_workers(dining, monkeypatch):
+    # The workers start before the first labelling and wait for the priors it gives: when
+    # it fails, the error reaches the caller and the workers are let go (no hang).
+    from ontodetect.pipeline import _detect
+
+    def fail(*args, **kwargs):
+        raise RuntimeError("first labelling failed")
+
+    monkeypatch.setattr(_detect, "_room_pass", fail)
+    with pytest.raises(RuntimeError, match="first labelling failed"):
+        detect(dining, jobs=2)
+
+
 def test_vote_workers_fork_only_when_safe():
     import threading
 

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from .cloud import PointCloud
 from .errors import InvalidParameterError
@@ -59,6 +60,8 @@ UNLABELLED_GREY = 128
 UNLABELLED_FADE = 0.5
 #: The names of our per-point fields (CloudCompare loads ``scalar_*`` PLY properties).
 SCALAR_FIELDS = ("scalar_label", "scalar_instance", "scalar_score")
+#: Points coloured at a time for the labelled cloud.
+COLOR_BLOCK = 1 << 20
 
 
 @dataclass(frozen=True)
@@ -117,12 +120,14 @@ def labelled_cloud(result: Result, *, format: str = "ply") -> PointCloud:
     if cloud.rgb is not None:
         for i, c in enumerate(("red", "green", "blue")):
             fields[_free_name(f"input_{c}", set(fields))] = cloud.rgb[:, i]
-        grey = cloud.rgb.astype(np.float64).mean(axis=1, keepdims=True)
-        base = UNLABELLED_FADE * cloud.rgb + (1 - UNLABELLED_FADE) * grey
-    else:
-        base = np.full((len(cloud), 3), UNLABELLED_GREY, dtype=np.float64)
     palette = np.array([[round(255 * v) for v in class_color(n)] for n in names], np.float64)
-    rgb = np.where((label >= 0)[:, None], palette[np.maximum(label, 0)], base)
+    rgb = np.empty((len(cloud), 3), dtype=np.uint8)
+    # Block by block: the float64 temporaries of a block, not of the whole cloud (about
+    # 1 GB at 10 million points).
+    for start in range(0, len(cloud), COLOR_BLOCK):
+        rows = slice(start, start + COLOR_BLOCK)
+        own = None if cloud.rgb is None else cloud.rgb[rows]
+        rgb[rows] = _class_colors(label[rows], own, palette)
     ours = [label, instance, score]
     for name, values in zip(SCALAR_FIELDS, ours):
         fields[_free_name(name, set(fields))] = values
@@ -130,9 +135,21 @@ def labelled_cloud(result: Result, *, format: str = "ply") -> PointCloud:
         fields["classification"] = np.where(
             label >= 0, LAS_CLASS_BASE + label, LAS_UNCLASSIFIED
         ).astype(np.uint8)
-    return cloud.replace(
-        rgb=np.clip(np.round(rgb), 0, 255).astype(np.uint8), fields=fields, normals=None
-    )
+    return cloud.replace(rgb=rgb, fields=fields, normals=None)
+
+
+def _class_colors(
+    label: NDArray[np.int64], rgb: NDArray[np.uint8] | None, palette: NDArray[np.float64]
+) -> NDArray[np.uint8]:
+    """(k, 3) colours of labelled.ply for points of class ``label`` (-1: none, their own
+    ``rgb`` faded towards grey, or grey)."""
+    if rgb is not None:
+        grey = rgb.astype(np.float64).mean(axis=1, keepdims=True)
+        base = UNLABELLED_FADE * rgb + (1 - UNLABELLED_FADE) * grey
+    else:
+        base = np.full((len(label), 3), UNLABELLED_GREY, dtype=np.float64)
+    out = np.where((label >= 0)[:, None], palette[np.maximum(label, 0)], base)
+    return np.clip(np.round(out), 0, 255).astype(np.uint8)
 
 
 def labelled_comments(result: Result, cloud: PointCloud) -> list[str]:
@@ -218,6 +235,7 @@ def _write_files(
     labelled = labelled_cloud(result, format=labelled_format)
     options = {"comments": labelled_comments(result, labelled)} if labelled_format == "ply" else {}
     ply_path = write_cloud(out / LABELLED_FORMATS[labelled_format], labelled, **options)
+    del labelled  # written: its copy of every point need not live on while the picture is drawn
     png = None
     if picture:
         names = result.class_names

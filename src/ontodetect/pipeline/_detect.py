@@ -14,7 +14,7 @@ import threading
 import time
 import warnings
 from collections.abc import Mapping, Sequence
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import Future, ProcessPoolExecutor
 from dataclasses import dataclass
 from typing import Any
 
@@ -180,35 +180,17 @@ def detect(
     ground = find_ground(scan, config, plane=plane) if turned or plane is not None else None
     shared = _PassInputs(ontology, priors, seed, eye, ground)
     before = time.perf_counter() - t0
-    first = None
-    if auto:
-        # A first labelling, every class competing and no prior, says what the room holds:
-        # P_N from it (and from photographs, when given), then every pass with its priors.
-        first = _one_pass(scan, config, shared)
-        shape, area_seen = _room_shape(first[0], cloud, eye) if d.room_shape else (None, {})
-        rooms = rooms_from_objects(_found_objects(first[2], first[1]), ontology, shape=shape)
-        if scene_rooms is not None:
-            from ..environment import combine_room_priors  # lazy: only with photographs
-
-            rooms = combine_room_priors(rooms, scene_rooms)
-        priors = relative_priors(ontology, rooms)
-        shared = dataclasses.replace(shared, priors=priors)
-        environment = {
-            "source": "scan+images" if scene_rooms else "scan",
-            "rooms": rooms,
-            **area_seen,
-        }
-    if workers:
-        with ProcessPoolExecutor(max_workers=workers, mp_context=fork_context()) as pool:
-            futures = [pool.submit(_pass_clusters, scan, c, shared) for c in turned]
-            seg, scores, choices, found, timings = _one_pass(scan, config, shared, first=first)
-            others = [f.result() for f in futures]
-    else:
+    with _OtherPasses(scan, shared, turned, workers, wait=auto) as others:
+        first = None
+        if auto:
+            first, priors, environment = _room_pass(scan, config, shared, scene_rooms)
+            shared = dataclasses.replace(shared, priors=priors)
+            others.send_priors(priors)
         seg, scores, choices, found, timings = _one_pass(scan, config, shared, first=first)
-        others = [_pass_clusters(scan, c, shared) for c in turned]
+        passes = others.results()
     timings["segment"] += before
     if turned:
-        found, choices = _vote(cloud, seg, scores, choices, found, others, ontology)
+        found, choices = _vote(cloud, seg, scores, choices, found, passes, ontology)
         timings["votes"] = time.perf_counter() - t0 - sum(timings.values())
     return numbered_result(
         cloud,
@@ -317,10 +299,128 @@ def _vote_workers(jobs: int | None, passes: int) -> int:
     return min(passes, jobs) if jobs > 1 else 0
 
 
-def _pass_clusters(cloud: PointCloud, config: Config, shared: _PassInputs) -> list[PassCluster]:
-    """Every cluster of one pass, as the vote needs it (a unit of work for a worker)."""
+def _room_pass(
+    scan: PointCloud,
+    config: Config,
+    shared: _PassInputs,
+    scene_rooms: Mapping[str, float] | None,
+) -> tuple[_Pass, dict[str, float], dict[str, Any]]:
+    """A first labelling, every class competing and no prior, says what the room holds:
+    the pass, the class priors relative to the room it gives (and to photographs, when
+    given) and the ``environment`` entry of the result."""
+    first = _one_pass(scan, config, shared)
+    shape, area_seen = (
+        _room_shape(first[0], scan, shared.viewpoint) if config.detect.room_shape else (None, {})
+    )
+    found = _found_objects(first[2], first[1])
+    rooms = rooms_from_objects(found, shared.ontology, shape=shape)
+    if scene_rooms is not None:
+        from ..environment import combine_room_priors  # lazy: only with photographs
+
+        rooms = combine_room_priors(rooms, scene_rooms)
+    environment = {
+        "source": "scan+images" if scene_rooms else "scan",
+        "rooms": rooms,
+        **area_seen,
+    }
+    return first, relative_priors(shared.ontology, rooms), environment
+
+
+class _OtherPasses:
+    """The passes after the first (``turned``: the configuration of each), in forked
+    workers that start at once (``workers`` > 0) or in this process when their results
+    are asked for.
+
+    With ``wait``, the class priors come from the first labelling of this process
+    (:meth:`send_priors`): the workers segment and score meanwhile and wait for them
+    before labelling (the likelihoods do not depend on the priors, only the posterior
+    does, as in :func:`ontodetect.ontology.with_priors`), so the passes end as if they
+    had known the priors from the start.
+    """
+
+    def __init__(
+        self,
+        scan: PointCloud,
+        shared: _PassInputs,
+        turned: Sequence[Config],
+        workers: int,
+        *,
+        wait: bool,
+    ) -> None:
+        self._scan, self._shared, self._turned = scan, shared, list(turned)
+        self._workers, self._wait = workers, wait
+        self._pool: ProcessPoolExecutor | None = None
+        self._inbox: Any = None
+        self._futures: list[Future[list[PassCluster]]] = []
+        self._owed = 0
+
+    def __enter__(self) -> _OtherPasses:
+        if self._workers and self._turned:
+            context = fork_context()
+            self._inbox = context.SimpleQueue() if self._wait else None
+            self._pool = ProcessPoolExecutor(
+                max_workers=self._workers,
+                mp_context=context,
+                # Inherited at the fork, never pickled: the scan can be large.
+                initializer=_start_vote_worker,
+                initargs=(self._scan, self._shared, self._inbox),
+            )
+            self._futures = [self._pool.submit(_worker_pass, c) for c in self._turned]
+            self._owed = len(self._futures) if self._wait else 0
+        return self
+
+    def send_priors(self, priors: Mapping[str, float]) -> None:
+        """The class priors of every pass, once this process knows them."""
+        self._shared = dataclasses.replace(self._shared, priors=priors)
+        for _ in range(self._owed):
+            self._inbox.put(dict(priors))
+        self._owed = 0
+
+    def results(self) -> list[list[PassCluster]]:
+        """Every cluster of every pass, in the order of ``turned``."""
+        if self._pool is not None:
+            return [f.result() for f in self._futures]
+        return [_pass_clusters(self._scan, c, self._shared) for c in self._turned]
+
+    def __exit__(self, *exc: object) -> None:
+        for _ in range(self._owed):  # no priors will come (this process failed): stop
+            self._inbox.put(None)
+        self._owed = 0
+        if self._pool is not None:
+            self._pool.shutdown(wait=True, cancel_futures=True)
+
+
+#: What a vote worker keeps from the process that forked it (:func:`_start_vote_worker`).
+_worker_state: dict[str, Any] = {}
+
+
+def _start_vote_worker(scan: PointCloud, shared: _PassInputs, inbox: Any) -> None:
+    """Keep, in a forked worker, the scan, what every pass shares and where the class
+    priors arrive when the parent estimates them (``inbox``; None when they are known)."""
+    _worker_state.update(scan=scan, shared=shared, inbox=inbox)
+
+
+def _worker_pass(config: Config) -> list[PassCluster]:
+    """One pass in a vote worker; with an inbox, scored under the first pass's priors,
+    then labelled under those the parent sends (None: it failed; the pass is dropped)."""
+    scan, shared, inbox = (_worker_state[k] for k in ("scan", "shared", "inbox"))
+    if inbox is None:
+        return _pass_clusters(scan, config, shared)
     with use_reporter(None):  # a forked worker must not draw the parent's progress bars
-        seg, scores, choices, _, _ = _one_pass(cloud, config, shared, found=False)
+        unlabelled = _one_pass(scan, config, shared, found=False, label=False)
+    priors = inbox.get()
+    if priors is None:
+        return []
+    return _pass_clusters(scan, config, dataclasses.replace(shared, priors=priors), unlabelled)
+
+
+def _pass_clusters(
+    cloud: PointCloud, config: Config, shared: _PassInputs, first: _Pass | None = None
+) -> list[PassCluster]:
+    """Every cluster of one pass, as the vote needs it (a unit of work for a worker);
+    ``first`` as for :func:`_one_pass`."""
+    with use_reporter(None):  # a forked worker must not draw the parent's progress bars
+        seg, scores, choices, _, _ = _one_pass(cloud, config, shared, found=False, first=first)
     return [
         (np.sort(cloud.index[c.point_indices]), dict(s.probabilities), ch.label)
         for c, s, ch in zip(seg, scores, choices)
@@ -334,10 +434,12 @@ def _one_pass(
     *,
     found: bool = True,
     first: _Pass | None = None,
+    label: bool = True,
 ) -> _Pass:
     """Segment, score and label once; detections (when ``found``) numbered 0, in cluster
     order. With ``first`` (this pass made with other priors), its clusters and their
-    likelihoods are kept and only the priors change."""
+    likelihoods are kept and only the priors change. Without ``label``, no labels nor
+    detections (empty lists): the pass is to be labelled under other priors."""
     d, ontology = config.detect, shared.ontology
     if first is not None:
         seg, scores, _, _, timings = first
@@ -360,6 +462,8 @@ def _one_pass(
                 advance(1)
         timings["score"] = time.perf_counter() - t0
 
+    if not label:
+        return seg, scores, [], [], timings
     t0 = time.perf_counter()
     choices, detections = label_and_detect(cloud, seg, scores, ontology, d, found=found)
     timings["label"] = time.perf_counter() - t0

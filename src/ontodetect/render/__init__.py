@@ -1,10 +1,10 @@
-"""Pictures of scans and results: a top view and a perspective view, drawn with Matplotlib,
-and ``view.html``, a self-contained page to turn a result around in a browser (three.js,
-vendored and inlined: no network).
+"""Pictures of scans and results: a top view and a perspective view, rasterised with NumPy
+and finished with Pillow, and ``view.html``, a self-contained page to turn a result around
+in a browser (three.js, vendored and inlined: no network).
 
 Objects are coloured by class and outlined by their oriented boxes; the rest of
 the scan is drawn in its own colours, faded, so that the objects stand out.
-Rendering never needs a screen (the Agg backend).
+Rendering never needs a screen.
 """
 
 from __future__ import annotations
