@@ -288,6 +288,20 @@ class PrepareConfig(_Section):
     wall_band: float = _param(
         0.04, NON_NEGATIVE, "Voxels within this distance (m) of a wall plane are wall."
     )
+    # Open-plan rooms: glazing and curtains show no wall plane, and a SLAM map that closed
+    # a loop late keeps a drifted copy of part of the floor (issue 20).
+    shell_walls: bool = _param(
+        False,
+        Boolean(),
+        "Glazed and curtained walls: tall surfaces from near the floor, gaps allowed, in "
+        "lines at the room's boundary, are wall.",
+    )
+    floor_layers: bool = _param(
+        True,
+        Boolean(),
+        "A drifted second floor layer (a large thin sheet up to 15 cm above or below the "
+        "floor) is floor.",
+    )
 
 
 @dataclass(frozen=True)

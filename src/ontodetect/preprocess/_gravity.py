@@ -64,6 +64,12 @@ FLOOR_SEARCH = 0.6
 MAX_BELOW_FLOOR = 0.05
 #: Without a floor, the floor is put at this percentile of heights.
 FALLBACK_PERCENTILE = 0.5
+#: A SLAM map that closed a loop late keeps a drifted copy of part of the floor 2-10 cm off
+#: it. Points down to this depth (m) below a floor may be such a copy (a thin sheet, at
+#: least the floor's smallest area) rather than a sign that the level is no floor: less than
+#: a stair's riser (0.19-0.2 m in building codes, e.g. DIN 18065), and no seat or table top
+#: is that low (seats from 35 cm, Table 4.1).
+DUPLICATE_FLOOR_DEPTH = 0.15
 
 
 @dataclass(frozen=True)
@@ -85,6 +91,7 @@ def find_floor(
     tolerance: float = FLOOR_TOLERANCE,
     cells: CellPlanes | None = None,
     refine: bool = True,
+    layers: bool = True,
 ) -> FloorFit:
     """Find the floor: the lowest large plane roughly perpendicular to ``up``.
 
@@ -110,6 +117,9 @@ def find_floor(
     refine : bool
         Take the floor's own normal as up (True) or keep ``up`` and only find the
         floor height along it.
+    layers : bool
+        Allow a drifted copy of the floor below it (a thin sheet of at least
+        ``min_area`` at most :data:`DUPLICATE_FLOOR_DEPTH` down) in the points below.
 
     Returns
     -------
@@ -132,14 +142,16 @@ def find_floor(
             cand = _candidates(capped)
             best = cand[int(np.argmax(_support(capped, cand, HORIZONTAL_TOLERANCE / 2)))]
             normal = _refine(capped, best, HORIZONTAL_TOLERANCE / 2)
-        fit, members = _lowest_level(pts, normal, capped, ctr[cap], cnt[cap], cells.cell, min_area)
+        fit, members = _lowest_level(
+            pts, normal, capped, ctr[cap], cnt[cap], cells.cell, min_area, layers
+        )
         if fit is not None and refine:
             # Cell normals of a noisy sensor scatter by several degrees; a plane through
             # the centres of the floor's cells is much steadier.
             better = _plane_normal(ctr[cap][members], cnt[cap][members], normal)
             if better @ u > np.cos(np.radians(tolerance)):
                 refit, _ = _lowest_level(
-                    pts, better, capped, ctr[cap], cnt[cap], cells.cell, min_area
+                    pts, better, capped, ctr[cap], cnt[cap], cells.cell, min_area, layers
                 )
                 fit = refit if refit is not None else fit
     if fit is not None:
@@ -185,7 +197,7 @@ def _plane_normal(centers, weights, near):
     return n if n @ near >= 0 else -n
 
 
-def _lowest_level(pts, normal, normals, centers, counts, cell, min_area):
+def _lowest_level(pts, normal, normals, centers, counts, cell, min_area, layers=False):
     """The lowest level along ``normal`` holding ``min_area`` of horizontal cells."""
     horiz = normals @ normal > np.cos(np.radians(LEVEL_TOLERANCE))
     if not horiz.any():
@@ -200,14 +212,31 @@ def _lowest_level(pts, normal, normals, centers, counts, cell, min_area):
     # A floor seen by a noisy sensor, or not perfectly flat, spreads over several bins.
     half = round(LEVEL_WINDOW / LEVEL_BIN / 2)
     smooth = window_sum(area, half)
-    heights = pts[:: max(1, len(pts) // 200_000)] @ normal
+    sample = pts[:: max(1, len(pts) // 200_000)]
+    heights = sample @ normal
     bottom = float(np.percentile(heights, FALLBACK_PERCENTILE))
     for b in np.flatnonzero(smooth >= min_area):
         sel = np.abs(bins - b) <= half
         level = float(np.average(h[sel], weights=counts[horiz][sel]))
         if level - bottom > FLOOR_SEARCH:
             break  # higher levels are furniture or shelves, not a floor
-        if np.mean(heights < level - 2 * LEVEL_BIN) <= MAX_BELOW_FLOOR:
+        below = heights < level - 2 * LEVEL_BIN
+        if np.mean(below) <= MAX_BELOW_FLOOR or (
+            layers and _drifted_copy(sample, heights, below, level, normal, cell, min_area)
+        ):
             members = horiz & (np.abs(h_all - level) <= (half + 1) * LEVEL_BIN)
             return FloorFit(normal, level, float(smooth[b]), True), members
     return None, None
+
+
+def _drifted_copy(sample, heights, below, level, normal, cell, min_area) -> bool:
+    """Whether the points below a level are a drifted copy of the floor: within
+    :data:`DUPLICATE_FLOOR_DEPTH` of it, one thin layer, at least ``min_area`` across."""
+    if np.mean(heights < level - DUPLICATE_FLOOR_DEPTH) > MAX_BELOW_FLOOR:
+        return False
+    lo, hi = np.percentile(heights[below], [5, 95])
+    if hi - lo > LEVEL_WINDOW:
+        return False
+    flat = sample[below] - np.outer(heights[below], normal)
+    keys = np.unique(np.floor(flat / cell).astype(np.int64), axis=0)
+    return len(keys) * cell**2 >= min_area

@@ -495,6 +495,7 @@ def find_ground(
             min_area=cfg.min_floor_area,
             cells=cells,
             refine=cfg.level_on_floor,
+            layers=cfg.floor_layers,
         )
     if (
         plane is None
@@ -674,6 +675,8 @@ def prepare(
             min_wall_height=cfg.min_wall_height,
             wall_band=cfg.wall_band,
             floor_area=floor.area,
+            shell_walls=cfg.shell_walls,
+            floor_layers=cfg.floor_layers,
         )
     else:
         labels = np.zeros(len(grid), dtype=np.int8)

@@ -231,6 +231,234 @@ def _wall_segments(ctr, nrm, sample, cell, *, min_length, min_height, band):
     return out
 
 
+# -- the room shell where no wall plane shows: glazed and curtained walls ----------------
+#: Columns (m, a square of the horizontal grid) in which tall surfaces are sought: about
+#: one fold of a curtain (folds every 12-20 cm) and the width of a glazing mullion.
+SHELL_COLUMN = 0.1
+#: Height bins (m) of a column.
+SHELL_BIN = 0.1
+#: A tall surface starts near the floor: below the lowest seat (Table 4.1: seats from 35 cm),
+#: so that what it is cannot be furniture seen above a seat; floor-length curtains end 1-2 cm
+#: above the floor and glazing frames 5-10 cm.
+SHELL_FOOT = 0.3
+#: ... and reaches this height (m). Glazing and curtains rise to door-head height (doors of
+#: 2.0-2.1 m, e.g. DIN 18101's 2.01 m; curtain rails hang above the window head), but a scan
+#: made with a hand-held camera often stops lower (the tops of ScanNet walls at 1.6-1.8 m in
+#: some rooms; simulated scans see curtains up to 1.5-1.8 m). So the test is the altitude
+#: cut-off of Table 4.1 (1.4 m: no seat or table is higher) and one bin: what reaches from
+#: below a seat to above it is no object looked for (high-backed chairs stop at 1.3 m).
+SHELL_HEAD = 1.5
+#: Share of the height bins from the foot to the head that must hold points: gaps are allowed
+#: (what stands in front of a curtain hides part of it; glass returns almost nothing).
+SHELL_FILL = 0.5
+#: Columns within this distance (m) of a line belong to it: curtain folds are 3-10 cm deep.
+SHELL_BAND = 0.1
+#: Thickness (m) of the slices across a wall in which its tall surface is traced: a few
+#: voxels.
+SHELL_SLICE = 0.05
+#: Largest gap (m) between tall columns along one wall: a glazing pane between two mullions
+#: (curtain-wall modules and panes are 1.2-1.8 m wide) or a window between two curtains.
+SHELL_GAP = 2.0
+#: Fewest tall columns, and shortest run (m), of a glazed or curtained wall: one curtain
+#: gathered at the side of a window is 0.3-0.6 m wide.
+SHELL_MIN_COLUMNS = 3
+SHELL_MIN_LENGTH = 0.3
+#: At the room's boundary: no more than MAX_BEHIND_WALL of the scene within the run's span
+#: lies farther than this (m) behind it. Curtain rails stand 5-15 cm off the wall and folds
+#: add up to 10 cm; a wall behind a curtain is nearer than this.
+SHELL_DEPTH = 0.3
+#: Between tall columns, voxels up to this height (m) on the line are wall too: the bottom
+#: frame of glazing and skirting boards (6-15 cm), which would join everything along it.
+SHELL_SKIRT = 0.15
+
+
+def _tall(keys: NDArray[np.int64], z: NDArray[np.float64]) -> tuple:
+    """Which cells hold a tall surface: (cell of every point, cell keys, tall per cell).
+    ``keys`` (n, 2) int are the points' cells, ``z`` (n,) their heights."""
+    cells, inverse = np.unique(keys, axis=0, return_inverse=True)
+    inverse = inverse.reshape(-1)
+    nbins = round(SHELL_HEAD / SHELL_BIN)
+    zb = np.floor(z / SHELL_BIN).astype(np.int64)
+    low = np.zeros(len(cells), dtype=bool)
+    high = np.zeros(len(cells), dtype=bool)
+    low[inverse[z < SHELL_FOOT]] = True
+    high[inverse[z >= SHELL_HEAD]] = True
+    inside = (zb >= 0) & (zb < nbins)
+    occupied = np.zeros((len(cells), nbins), dtype=bool)
+    occupied[inverse[inside], zb[inside]] = True
+    return inverse, cells, low & high & (occupied.mean(axis=1) >= SHELL_FILL)
+
+
+def _tall_columns(c: NDArray[np.float64], free: NDArray[np.bool_]) -> tuple:
+    """Columns of the horizontal grid holding a tall surface: (column of every voxel, -1
+    when not free; ids of the tall columns; their centres (k, 2))."""
+    idx = np.flatnonzero(free & (c[:, 2] >= 0.0))
+    col = np.full(len(c), -1, dtype=np.int64)
+    if len(idx) == 0:
+        return col, np.zeros(0, dtype=np.int64), np.zeros((0, 2))
+    keys = np.floor(c[idx, :2] / SHELL_COLUMN).astype(np.int64)
+    inverse, cells, tall = _tall(keys, c[idx, 2])
+    col[idx] = inverse
+    ids = np.flatnonzero(tall)
+    return col, ids, (cells[ids] + 0.5) * SHELL_COLUMN
+
+
+def _shell_walls(
+    c: NDArray[np.float64], labels: NDArray[np.int8], sample: NDArray[np.float64]
+) -> list[StructurePlane]:
+    """Glazed and curtained walls: tall surfaces (from near the floor to door-head height,
+    gaps allowed) in lines at the room's boundary. Their voxels, and those of the glazing's
+    bottom frame between them, are labelled wall in ``labels`` (modified)."""
+    from scipy import ndimage  # heavy: imported when used (start-up)
+
+    _, ids, xy = _tall_columns(c, labels == NONE)
+    planes: list[StructurePlane] = []
+    if len(ids) < SHELL_MIN_COLUMNS:
+        return planes
+    az = np.radians(np.arange(0.0, 180.0, AZIMUTH_BIN))
+    dirs = np.stack([np.cos(az), np.sin(az)], axis=1)
+    centre = xy.mean(axis=0)
+    rho = (xy - centre) @ dirs.T  # (k, azimuths)
+    r_lo = float(rho.min())
+    r_bins = int(np.ceil((float(rho.max()) - r_lo) / SHELL_COLUMN)) + 1
+    free = np.ones(len(ids), dtype=bool)
+    for _ in range(MAX_WALLS):
+        if free.sum() < SHELL_MIN_COLUMNS:
+            break
+        ri = ((rho[free] - r_lo) / SHELL_COLUMN).astype(np.int64)
+        hist = np.zeros((len(az), r_bins))
+        np.add.at(hist, (np.broadcast_to(np.arange(len(az)), ri.shape), ri), 1.0)
+        smooth = ndimage.convolve1d(hist, np.ones(2), axis=1, mode="constant")
+        a, r = np.unravel_index(int(np.argmax(smooth)), smooth.shape)
+        if smooth[a, r] < SHELL_MIN_COLUMNS:
+            break
+        on_line = free & (np.abs(rho[:, a] - (r_lo + r * SHELL_COLUMN)) <= SHELL_BAND)
+        if on_line.sum() < SHELL_MIN_COLUMNS:
+            break
+        free &= ~on_line
+        planes += _shell_runs(c, labels, xy[on_line], dirs[a], sample)
+    return planes
+
+
+def _shell_runs(c, labels, xy, n2, sample) -> list[StructurePlane]:
+    """Runs of the tall columns at ``xy`` (k, 2) on one line split at gaps; those at the room's
+    boundary become walls."""
+    along = np.array([-n2[1], n2[0]])
+    t = xy @ along
+    order = np.argsort(t)
+    out = []
+    for run in np.split(order, np.flatnonzero(np.diff(t[order]) > SHELL_GAP) + 1):
+        tt = np.sort(t[run])
+        t0, t1 = tt[0] - SHELL_COLUMN / 2, tt[-1] + SHELL_COLUMN / 2
+        if len(run) < SHELL_MIN_COLUMNS or t1 - t0 < SHELL_MIN_LENGTH:
+            continue
+        n = np.array([n2[0], n2[1], 0.0])
+        t_dir = np.array([along[0], along[1], 0.0])
+        off = float(np.median(xy[run] @ n2))
+        ts = sample @ t_dir
+        span = (ts >= t0) & (ts <= t1)
+        d = sample[span] @ n - off
+        if np.count_nonzero(d > 0) < np.count_nonzero(d < 0):
+            n, off, d = -n, -off, -d
+            t_dir = -t_dir
+            t0, t1, tt = -t1, -t0, np.sort(-tt)
+        if np.count_nonzero(d < -SHELL_DEPTH) > MAX_BEHIND_WALL * max(len(d), 1):
+            continue
+        # The tall surface itself, traced on cells thin across the line (a chair's back a
+        # few centimetres in front of a curtain is no part of it), and low voxels between
+        # the surface and the boundary behind it along the whole run (the glazing's bottom
+        # frame, skirting), which would join everything standing along it.
+        tv = c @ t_dir
+        dv = c @ n - off
+        cand = np.flatnonzero(
+            (labels == NONE)
+            & (tv >= t0)
+            & (tv <= t1)
+            & (dv >= -SHELL_DEPTH)
+            & (dv <= SHELL_BAND + SHELL_COLUMN / 2)
+            & (c[:, 2] >= 0.0)
+        )
+        keys = np.stack(
+            [np.floor(tv[cand] / SHELL_COLUMN), np.floor(dv[cand] / SHELL_SLICE)], axis=1
+        ).astype(np.int64)
+        inverse, _, tall = _tall(keys, c[cand, 2])
+        on = tall[inverse]
+        front = float(dv[cand[on]].max()) if on.any() else 0.0
+        take = cand[on | ((c[cand, 2] <= SHELL_SKIRT) & (dv[cand] <= front))]
+        if not on.any():
+            continue
+        labels[take] = WALL
+        p = c[take]
+        ext = np.stack([p.min(0), p.max(0)])
+        area = float(len(run)) * SHELL_COLUMN * SHELL_HEAD
+        out.append(StructurePlane("wall", n, off, ext, area))
+    return out
+
+
+# -- a drifted second floor layer ---------------------------------------------------------
+#: A horizontal sheet at most this high (m) above the floor is floor: a SLAM map that closed
+#: a loop late keeps a copy of part of the floor 2-10 cm above or below it. Nothing looked
+#: for has a horizontal surface that low (seats from 35 cm, Table 4.1; the lowest coffee
+#: tables about 30 cm), and a step up is at most a stair's riser (0.19-0.2 m in building
+#: codes, e.g. DIN 18065): a surface that low is walked on.
+FLOOR_LAYER_TOP = 0.15
+#: Largest height spread (m) of a sheet within one cell: a tilted copy (up to 1-2 degrees)
+#: and sensor noise, not the side of an object.
+FLOOR_LAYER_THICKNESS = 0.04
+#: Cells (m) of the grid the sheet is traced on.
+FLOOR_LAYER_CELL = 0.1
+
+
+def _floor_layers(
+    c: NDArray[np.float64], labels: NDArray[np.int8], *, band: float, min_area: float
+) -> float:
+    """Label as floor the voxels of large thin horizontal sheets just above the floor (a
+    drifted copy of it); ``labels`` is modified. Returns the sheets' area (m²)."""
+    from scipy import ndimage  # heavy: imported when used (start-up)
+
+    z = c[:, 2]
+    idx = np.flatnonzero((labels == NONE) & (z >= band) & (z <= FLOOR_LAYER_TOP))
+    if len(idx) == 0:
+        return 0.0
+    ij = np.floor(c[idx, :2] / FLOOR_LAYER_CELL).astype(np.int64)
+    ij -= ij.min(axis=0) - 1
+    shape = tuple(ij.max(axis=0) + 2)
+    flat = np.ravel_multi_index((ij[:, 0], ij[:, 1]), shape)
+    size = shape[0] * shape[1]
+    zi = z[idx]
+    lo = np.full(size, np.inf)
+    hi = np.full(size, -np.inf)
+    np.minimum.at(lo, flat, zi)
+    np.maximum.at(hi, flat, zi)
+    total = np.bincount(flat, weights=zi, minlength=size)
+    count = np.bincount(flat, minlength=size)
+    sheet = ((count > 0) & (hi - lo <= FLOOR_LAYER_THICKNESS)).reshape(shape)
+    # A sheet is large in every direction: the lower edge of a sofa's side or a plinth
+    # makes a strip one or two cells wide, which opening removes.
+    square = np.ones((3, 3), dtype=bool)
+    sheet = ndimage.binary_opening(sheet, square)
+    comp, k = ndimage.label(sheet, square)
+    if k == 0:
+        return 0.0
+    area = np.bincount(comp.ravel(), minlength=k + 1) * FLOOR_LAYER_CELL**2
+    keep = area >= min_area
+    keep[0] = False
+    layer = keep[comp]
+    if not layer.any():
+        return 0.0
+    with np.errstate(invalid="ignore", divide="ignore"):
+        height = np.where(layer.ravel(), total / np.maximum(count, 1), np.nan).reshape(shape)
+    # Cells beside the sheet (a chair leg stands on it) take the nearest sheet height and
+    # give up only their voxels on it.
+    _, near = ndimage.distance_transform_edt(~layer, return_indices=True)
+    height = height[tuple(near)]
+    reach = ndimage.binary_dilation(layer, square).ravel()
+    on = reach[flat] & (np.abs(zi - height.ravel()[flat]) <= FLOOR_LAYER_THICKNESS / 2)
+    on |= layer.ravel()[flat]
+    labels[idx[on]] = FLOOR
+    return float(area[keep].sum())
+
+
 def find_structure(
     centers: NDArray[np.float64],
     cells: CellPlanes,
@@ -242,6 +470,8 @@ def find_structure(
     min_wall_height: float = 1.2,
     wall_band: float = 0.04,
     floor_area: float = 0.0,
+    shell_walls: bool = False,
+    floor_layers: bool = True,
 ) -> tuple[NDArray[np.int8], list[StructurePlane]]:
     """Label voxels as floor, wall, ceiling or none in a levelled scene.
 
@@ -263,6 +493,12 @@ def find_structure(
         Voxels within this distance (m) of a wall are wall.
     floor_area : float
         Floor surface found when levelling (m²), recorded on the floor plane.
+    shell_walls : bool
+        Also find glazed and curtained walls: tall surfaces from near the floor to door-head
+        height and more, gaps allowed, in lines at the room's boundary.
+    floor_layers : bool
+        Also take as floor large thin horizontal sheets just above it (a drifted copy of
+        the floor in a SLAM map).
 
     Returns
     -------
@@ -281,6 +517,8 @@ def find_structure(
     labels[is_floor] = FLOOR
     if len(c) == 0:
         return labels, planes
+    if floor_layers:
+        _floor_layers(c, labels, band=floor_band, min_area=min_floor_area)
     sample = c[:: max(1, len(c) // 100_000)]
     walls = _walls(
         cells, sample, min_length=min_wall_length, min_height=min_wall_height, band=wall_band
@@ -294,6 +532,8 @@ def find_structure(
         inside = np.all((p >= w.extent[0] - margin) & (p <= w.extent[1] + margin), axis=1)
         labels[near[inside]] = WALL
     planes += walls
+    if shell_walls:
+        planes += _shell_walls(c, labels, sample)
     ceiling = _ceiling(cells, ceiling_above, min_floor_area)
     if ceiling is not None:
         labels[(c[:, 2] > -ceiling.offset - floor_band) & (labels == NONE)] = CEILING
