@@ -57,6 +57,7 @@ def test_sigma_floors_are_those_calibration_used():
         "area": 0.01,
         "fill": 0.03,
         "open_below": 0.03,
+        "seen_below": 0.03,
         "overlap": 0.03,
         "rise": 0.02,
         "planes": 0.5,
@@ -108,6 +109,23 @@ def test_a_scene_feature_reads_the_description_and_costs_nothing_when_absent():
         assert wet.log_likelihood < unknown.log_likelihood - 1.0
     finally:
         del FEATURES["part"]["wet"]
+
+
+def test_a_part_rise_is_measured_from_the_plane_the_part_takes():
+    """``rise`` of a part is the cluster's height above the plane it takes: a seat under an
+    armchair's arms has them rising above it, the arms' tops have nothing above them."""
+    o = parse_ontology(
+        "format: ontodetect.ontology/1\nclasses:\n  box:\n"
+        "    parts:\n      top: {tilt: {max: 5}, rise: {max: 0.06, soft: 0.05}}\n"
+    )
+    seat, arms = P(0.0, 0.42, 0.55, 0.5), P(0.0, 0.62, 0.85, 0.2, cy=0.3)
+    desc = cluster([seat, arms], length=0.9)
+    assert FEATURES["part"]["rise"].in_cluster(desc, 0) == pytest.approx(0.2)
+    assert FEATURES["part"]["rise"].in_cluster(desc, 1) == 0.0
+    best = score_class(o["box"], desc)
+    assert best.assignment["top"] == 1
+    only_seat = score_class(o["box"], replace(desc, planes=[seat, arms][:1], height=0.64))
+    assert only_seat.assignment["top"] is None  # a seat with arms above it is no top
 
 
 def test_registering_twice_or_without_a_measure_is_refused():
