@@ -166,6 +166,25 @@ def _gap(desc: Any, i: int, j: int) -> float:
     return float(desc.planes[j].centroid[2] - desc.planes[i].centroid[2])
 
 
+#: A plane whose normal leans less than this from vertical (the sine of 17 degrees from
+#: horizontal) has no front and back: ``behind`` is 0 for it.
+_FACING = 0.3
+
+
+def _behind(desc: Any, i: int, j: int) -> float:
+    """How far (m) b's centroid lies behind plane a, horizontally along a's outward normal
+    (a backrest's normal points away from its seat): negative in front of it."""
+    normal = np.asarray(desc.planes[i].normal, dtype=float)[:2]
+    size = float(np.hypot(*normal))
+    if size < _FACING:
+        return 0.0
+    step = (
+        np.asarray(desc.planes[j].centroid, dtype=float)[:2]
+        - np.asarray(desc.planes[i].centroid, dtype=float)[:2]
+    )
+    return float(normal @ step) / size
+
+
 def _rise_above(desc: Any, i: int) -> float:
     """Height of the cluster above the highest inlier of plane ``i`` (m, at least 0)."""
     return max(0.0, float(desc.height) - float(desc.planes[i].z_max))
@@ -228,6 +247,9 @@ for _feature in (
             relation=_relation_attribute("distance", math.inf)),
     Feature("gap", "relation", "Pr", "height of b's centroid minus a's (m)", 0.02,
             relation=_gap),
+    Feature("behind", "relation", "Pr",
+            "horizontal distance of b's centroid behind plane a, along a's outward normal "
+            "(m; negative in front of it)", 0.02, relation=_behind),
     Feature("overlap", "relation", "Pr",
             "share of the smaller footprint the two overlap in the xy plane (0..1)", 0.03,
             relation=_relation_attribute("xy_overlap", 0.0)),
