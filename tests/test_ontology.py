@@ -196,7 +196,7 @@ def test_label_probability_sums_the_classes_written_under_a_label():
 
 def test_chair_assignment_and_factors():
     s = score_class(builtin_ontology()["chair"], chair())
-    assert s.assignment == {"seat": 0, "backrest": 1, "apron": None}
+    assert s.assignment == {"seat": 0, "backrest": 1, "apron": None, "arm": None, "other_arm": None}
     # every factor of P_def is the product of its constraints' Gaussians
     seat = {c.feature: c for c in s.constraints if c.part == "seat"}
     g = builtin_ontology()["chair"].part("seat").constraints["height"]

@@ -1,7 +1,7 @@
 """The feature registry: features found by name, one call to add one."""
 
 import math
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pytest
@@ -57,6 +57,8 @@ def test_sigma_floors_are_those_calibration_used():
         "area": 0.01,
         "fill": 0.03,
         "open_below": 0.03,
+        "seen_below": 0.03,
+        "behind": 0.02,
         "overlap": 0.03,
         "rise": 0.02,
         "planes": 0.5,
@@ -108,6 +110,41 @@ def test_a_scene_feature_reads_the_description_and_costs_nothing_when_absent():
         assert wet.log_likelihood < unknown.log_likelihood - 1.0
     finally:
         del FEATURES["part"]["wet"]
+
+
+def test_a_part_rise_is_measured_from_the_plane_the_part_takes():
+    """``rise`` of a part is the cluster's height above the plane it takes: a seat under an
+    armchair's arms has them rising above it, the arms' tops have nothing above them."""
+    o = parse_ontology(
+        "format: ontodetect.ontology/1\nclasses:\n  box:\n"
+        "    parts:\n      top: {tilt: {max: 5}, rise: {max: 0.06, soft: 0.05}}\n"
+    )
+    seat, arms = P(0.0, 0.42, 0.55, 0.5), P(0.0, 0.62, 0.85, 0.2, cy=0.3)
+    desc = cluster([seat, arms], length=0.9)
+    assert FEATURES["part"]["rise"].in_cluster(desc, 0) == pytest.approx(0.2)
+    assert FEATURES["part"]["rise"].in_cluster(desc, 1) == 0.0
+    best = score_class(o["box"], desc)
+    assert best.assignment["top"] == 1
+    only_seat = score_class(o["box"], replace(desc, planes=[seat, arms][:1], height=0.64))
+    assert only_seat.assignment["top"] is None  # a seat with arms above it is no top
+
+
+def test_behind_measures_along_a_backrest_s_outward_normal():
+    """An armrest in front of the backrest is negative, a cistern top behind it positive; a
+    level plane has no front and back."""
+
+    @dataclass(frozen=True)
+    class Facing(P):
+        normal: tuple = (0.0, 1.0, 0.0)
+
+    back = Facing(85.0, 0.7, 0.45, 0.4, cy=0.2)
+    arm, cistern = P(0.0, 0.62, 0.6, 0.15, cy=-0.1), P(0.0, 0.76, 0.36, 0.2, cy=0.3)
+    desc = cluster([back, arm, cistern], length=0.8)
+    behind = FEATURES["relation"]["behind"].relation
+    assert behind(desc, 0, 1) == pytest.approx(-0.3)
+    assert behind(desc, 0, 2) == pytest.approx(0.1)
+    level = cluster([Facing(0.0, 0.5, 0.4, 0.4, normal=(0.0, 0.0, 1.0)), arm], length=0.5)
+    assert behind(level, 0, 1) == 0.0
 
 
 def test_registering_twice_or_without_a_measure_is_refused():

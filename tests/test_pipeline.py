@@ -141,6 +141,43 @@ def test_open_below_sees_the_floor_under_a_table_and_not_under_a_box(rng):
     assert all(d.open_below is None for d in describe_clusters(seg, viewpoint=(0, 0, 1.5)))
 
 
+def test_seen_below_finds_a_seat_inside_the_u_of_an_armchair_and_nothing_in_a_box():
+    """Inside the U of an armchair's arms and back top a lower seat is seen; under a closed
+    box's top nothing is. Tilted planes are not measured."""
+    from ontodetect.segment import seen_below, segment
+    from test_segmentation import rect, slab
+
+    rng = np.random.default_rng(1)  # a scan in which MSAC finds the seat among 8 planes
+    floor = rect(rng, (0, 0, 0), (5, 0, 0), (0, 3, 0), 0.03)
+    x0, y0 = 0.5, 0.5  # an armchair 0.9 x 0.85: seat 0.42, arms and back top 0.64
+    armchair = np.vstack(
+        [
+            rect(rng, (x0 + 0.2, y0, 0.42), (0.5, 0, 0), (0, 0.65, 0)),  # seat
+            rect(rng, (x0 + 0.2, y0, 0.0), (0.5, 0, 0), (0, 0, 0.42)),  # its front
+            slab(rng, (x0, y0, 0.0), (x0 + 0.2, y0 + 0.85, 0.64)),  # arm
+            slab(rng, (x0 + 0.7, y0, 0.0), (x0 + 0.9, y0 + 0.85, 0.64)),  # arm
+            slab(rng, (x0 + 0.2, y0 + 0.65, 0.0), (x0 + 0.7, y0 + 0.85, 0.64)),  # back
+        ]
+    )
+    box = slab(rng, (2.6, 0.6, 0.0), (3.6, 1.2, 0.64))
+    on_floor = ~(
+        np.all((floor[:, :2] > (x0, y0)) & (floor[:, :2] < (x0 + 0.9, y0 + 0.85)), axis=1)
+        | np.all((floor[:, :2] > (2.6, 0.6)) & (floor[:, :2] < (3.6, 1.2)), axis=1)
+    )
+    seg = segment(np.vstack([floor[on_floor], armchair, box]), seed=0)
+    values = seen_below(seg)
+    tops = {}
+    for c, v in zip(seg, values, strict=True):
+        assert len(v) == len(c.planes)
+        for plane, share in zip(c.planes, v, strict=True):
+            if plane.tilt > 10:
+                assert math.isnan(share)
+            elif plane.height > 0.55 and plane.area > 0.2:
+                tops[round(float(plane.centroid[0]))] = share
+    assert tops[3] < 0.05  # the box's top hides what is under it
+    assert max(s for x, s in tops.items() if x < 2) > 0.25  # the seat shows inside the U
+
+
 def _rows(a, b):
     return np.arange(a, b, dtype=np.int64)
 

@@ -67,6 +67,9 @@ class Feature:
         Calibration fits no sigma below this (units of the feature).
     plane : callable, optional
         Part features: ``plane -> float``, the value on one plane.
+    in_cluster : callable, optional
+        Part features measured on a plane within its cluster: ``(desc, i) -> float``
+        for plane ``i`` of the cluster description ``desc``.
     scene : bool
         Part features: the value comes from the cluster description's scene
         measurements (``desc.scene[name][i]``), not from the plane.
@@ -85,6 +88,7 @@ class Feature:
     description: str
     sigma_floor: float = 0.0
     plane: Callable[[Any], float] | None = None
+    in_cluster: Callable[[Any, int], float] | None = None
     scene: bool = False
     relation: Callable[[Any, int, int], float] | None = None
     cluster: Callable[[Any], float] | None = None
@@ -94,7 +98,7 @@ class Feature:
         if self.scope not in SCOPES:
             raise ValueError(f"scope must be one of {SCOPES}, got {self.scope!r}")
         measures = {
-            "part": self.plane is not None or self.scene,
+            "part": self.plane is not None or self.in_cluster is not None or self.scene,
             "relation": self.relation is not None,
             "cluster": self.cluster is not None,
         }
@@ -162,6 +166,30 @@ def _gap(desc: Any, i: int, j: int) -> float:
     return float(desc.planes[j].centroid[2] - desc.planes[i].centroid[2])
 
 
+#: A plane whose normal leans less than this from vertical (the sine of 17 degrees from
+#: horizontal) has no front and back: ``behind`` is 0 for it.
+_FACING = 0.3
+
+
+def _behind(desc: Any, i: int, j: int) -> float:
+    """How far (m) b's centroid lies behind plane a, horizontally along a's outward normal
+    (a backrest's normal points away from its seat): negative in front of it."""
+    normal = np.asarray(desc.planes[i].normal, dtype=float)[:2]
+    size = float(np.hypot(*normal))
+    if size < _FACING:
+        return 0.0
+    step = (
+        np.asarray(desc.planes[j].centroid, dtype=float)[:2]
+        - np.asarray(desc.planes[i].centroid, dtype=float)[:2]
+    )
+    return float(normal @ step) / size
+
+
+def _rise_above(desc: Any, i: int) -> float:
+    """Height of the cluster above the highest inlier of plane ``i`` (m, at least 0)."""
+    return max(0.0, float(desc.height) - float(desc.planes[i].z_max))
+
+
 def _censored_height(g: Gaussian, desc: Any, value: float) -> float:
     """The height of a cluster that reaches the altitude cut-off is only known to be at
     least what is seen: the mean of the Gaussian over ``CUT_SPAN`` above it."""
@@ -187,6 +215,9 @@ for _feature in (
             plane=_attribute("z_max")),
     Feature("bottom", "part", "He", "lowest inlier above the floor (m)", 0.02,
             plane=_attribute("z_min")),
+    Feature("rise", "part", "He",
+            "height of the cluster above the plane's highest inlier (m): nothing rises "
+            "above a cabinet's top", 0.02, in_cluster=_rise_above),
     Feature("length", "part", "Pr", "extent along the plane's major axis (m)", 0.03,
             plane=_attribute("length")),
     Feature("width", "part", "Pr", "extent along its minor axis (m)", 0.03,
@@ -203,6 +234,12 @@ for _feature in (
     Feature("open_below", "part", "Pr",
             "share of the plane's footprint under which the floor was seen (0..1)", 0.03,
             scene=True),
+    # A closed top hides what is under it (a cabinet); a seat seen inside the U of an
+    # armchair's arms and back top was seen through it. Measured by detect from the
+    # cluster's own planes.
+    Feature("seen_below", "part", "Pr",
+            "share of a horizontal plane's outline over which a lower horizontal plane of "
+            "the cluster was seen (0..1)", 0.03, scene=True),
     Feature("angle", "relation", "Pr", "angle between the normals, folded to [0, 90] degrees",
             2.0, relation=_relation_attribute("angle", 0.0)),
     Feature("distance", "relation", "Pr",
@@ -210,6 +247,9 @@ for _feature in (
             relation=_relation_attribute("distance", math.inf)),
     Feature("gap", "relation", "Pr", "height of b's centroid minus a's (m)", 0.02,
             relation=_gap),
+    Feature("behind", "relation", "Pr",
+            "horizontal distance of b's centroid behind plane a, along a's outward normal "
+            "(m; negative in front of it)", 0.02, relation=_behind),
     Feature("overlap", "relation", "Pr",
             "share of the smaller footprint the two overlap in the xy plane (0..1)", 0.03,
             relation=_relation_attribute("xy_overlap", 0.0)),

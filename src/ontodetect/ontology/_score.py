@@ -211,12 +211,15 @@ def _part_value(desc: ClusterDescription, i: int, feature: str) -> float:
     if f.scene:
         values = desc.scene_values(feature)
         return math.nan if values is None else float(values[i])
+    if f.in_cluster is not None:
+        return f.in_cluster(desc, i)
     return f.plane(desc.planes[i])  # type: ignore[misc]
 
 
 def plane_feature(plane: Any, feature: str) -> float:
     """The value of a part feature (see ``PART_FEATURES``) for one plane (not a scene
-    feature such as ``open_below``, which depends on the scene: :func:`part_values`)."""
+    feature such as ``open_below``, nor one measured within the cluster such as ``rise``:
+    :func:`part_values`)."""
     f = FEATURES["part"].get(feature)
     if f is None or f.plane is None:
         return float(getattr(plane, feature))

@@ -26,6 +26,7 @@ from ._measure import (
     describe_clusters,
     hidden_heights,
     open_below,
+    seen_below,
     shelter_heights,
 )
 from ._parts import PartSeed, horizontal_parts, seed_style, seeded_clusters
@@ -71,6 +72,7 @@ __all__ = [
     "relabel",
     "seed_style",
     "seeded_clusters",
+    "seen_below",
     "segment",
     "shelter_heights",
     "upright_box",

@@ -1,6 +1,7 @@
 """Scene measurements the ontology's scoring needs beyond a cluster's own planes: what
 stands beside a cluster (:func:`shelter_heights`), what it hides from a single view
-(:func:`hidden_heights`) and whether the floor shows under its tops (:func:`open_below`);
+(:func:`hidden_heights`), whether the floor shows under its tops (:func:`open_below`) and
+whether a lower surface of the cluster shows inside a top's outline (:func:`seen_below`);
 :func:`describe_clusters` gathers them into the scoring's input.
 """
 
@@ -23,6 +24,8 @@ __all__ = [
     "FLOOR_CELL",
     "OPEN_BELOW_HEIGHT",
     "OPEN_BELOW_RIM",
+    "SEEN_BELOW_CELL",
+    "SEEN_BELOW_DROP",
     "SELF_SHADOW",
     "SELF_SHADOW_DISTANCE",
     "SHELTER_AREA",
@@ -31,6 +34,7 @@ __all__ = [
     "describe_clusters",
     "hidden_heights",
     "open_below",
+    "seen_below",
     "shelter_heights",
 ]
 
@@ -41,11 +45,12 @@ def describe_cluster(
     ceiling: float = math.inf,
     hidden_below: float = -math.inf,
     open_below: Sequence[float] | None = None,
+    seen_below: Sequence[float] | None = None,
 ) -> ClusterDescription:
     """What the ontology scoring needs to know about a cluster (``shelter``: see
     :func:`shelter_heights`; ``ceiling``: the top of the search volume;
     ``hidden_below``: see :func:`hidden_heights`; ``open_below``: see
-    :func:`open_below`)."""
+    :func:`open_below`; ``seen_below``: see :func:`seen_below`)."""
     return ClusterDescription(
         planes=cluster.planes,
         relations=cluster.relations_by_pair,
@@ -57,6 +62,7 @@ def describe_cluster(
         ceiling=ceiling,
         hidden_below=hidden_below,
         open_below=open_below,
+        scene={} if seen_below is None else {"seen_below": seen_below},
     )
 
 
@@ -83,8 +89,8 @@ def describe_clusters(
     # From one view the floor under a top is hidden by the top itself: not measured there.
     below = open_below(seg) if viewpoint is None else [None] * len(seg)
     return [
-        describe_cluster(c, float(h), ceiling, float(b), o)
-        for c, h, b, o in zip(seg, shelter_heights(seg), hidden, below)
+        describe_cluster(c, float(h), ceiling, float(b), o, s)
+        for c, h, b, o, s in zip(seg, shelter_heights(seg), hidden, below, seen_below(seg))
     ]
 
 
@@ -138,6 +144,75 @@ def open_below(seg: Segmentation) -> list[list[float]]:
                     break
                 use = inner
             values.append(float(np.isin(use, seen).mean()))
+        out.append(values)
+    return out
+
+
+#: Cell of the horizontal grid on which :func:`seen_below` compares a top's outline with
+#: the surfaces under it (m): about the spacing of a 50,000-point room's points.
+SEEN_BELOW_CELL = 0.05
+#: A horizontal plane counts as under a top when its centroid lies at least this much
+#: lower (m): two pieces of one top split by a seam differ by less (the continuation step
+#: of the scoring, 5 cm), an armchair's seat lies 12 cm and more under its arms.
+SEEN_BELOW_DROP = 0.1
+
+
+def _grid_cells(xy: NDArray[np.float64]) -> NDArray[np.int64]:
+    """One integer per ``SEEN_BELOW_CELL`` cell of the points ``xy``."""
+    ij = np.floor(xy / SEEN_BELOW_CELL).astype(np.int64)
+    return (ij[:, 0] << 32) + (ij[:, 1] + (1 << 31))
+
+
+def _cells_inside(xy: NDArray[np.float64]) -> NDArray[np.int64]:
+    """The grid cells whose centres lie inside the convex hull of the points ``xy``
+    (the occupied cells themselves when the hull is degenerate)."""
+    from scipy.spatial import Delaunay, QhullError
+
+    own = np.unique(_grid_cells(xy))
+    lo = np.floor(xy.min(axis=0) / SEEN_BELOW_CELL).astype(np.int64)
+    hi = np.floor(xy.max(axis=0) / SEEN_BELOW_CELL).astype(np.int64)
+    ii, jj = np.meshgrid(np.arange(lo[0], hi[0] + 1), np.arange(lo[1], hi[1] + 1))
+    ij = np.column_stack([ii.ravel(), jj.ravel()])
+    try:
+        hull = Delaunay(np.unique(np.floor(xy / SEEN_BELOW_CELL), axis=0) + 0.5)
+    except QhullError:
+        return own
+    inside = ij[hull.find_simplex(ij + 0.5) >= 0]
+    keys = (inside[:, 0] << 32) + (inside[:, 1] + (1 << 31))
+    return np.union1d(keys, own)
+
+
+def seen_below(seg: Segmentation) -> list[list[float]]:
+    """Per cluster and plane, the share of a horizontal plane's outline (the convex hull of
+    its points, on a ``SEEN_BELOW_CELL`` grid) over which a lower horizontal plane of the
+    same cluster was seen (0..1); NaN for tilted planes.
+
+    A closed top hides what lies under it: a cabinet's inside is never seen, so nothing
+    shows within its outline. What is seen there was seen through the top, which is then
+    no closed top: the U of a club armchair's arms and back top, with the seat inside
+    it, lower. A horizontal plane lies under the top when its centroid is at least
+    ``SEEN_BELOW_DROP`` lower.
+    """
+    out: list[list[float]] = []
+    for c in seg:
+        centers = np.asarray(c.centers)
+        flat = [float(p.tilt) <= HORIZONTAL_TILT for p in c.planes]
+        values = []
+        for i, plane in enumerate(c.planes):
+            if not flat[i]:
+                values.append(math.nan)
+                continue
+            lower = [
+                q
+                for k, q in enumerate(c.planes)
+                if flat[k] and float(q.centroid[2]) <= float(plane.centroid[2]) - SEEN_BELOW_DROP
+            ]
+            if not lower:
+                values.append(0.0)
+                continue
+            outline = _cells_inside(centers[plane.inliers, :2])
+            under = np.unique(np.concatenate([_grid_cells(centers[q.inliers, :2]) for q in lower]))
+            values.append(float(np.isin(outline, under).mean()))
         out.append(values)
     return out
 
