@@ -25,6 +25,7 @@ from PIL import Image
 
 from ontodetect.io import atomic_write_bytes
 from ontodetect.render import CLASS_COLORS, box_corners
+from ontodetect.render._scene import BOX_EDGES
 from ontodetect.synth import CLASS_IDS, CLASS_NAMES, synthesize
 
 #: (room type, sensor, seed) of each picture; the file is ``<room>-<sensor>.png``.
@@ -41,20 +42,6 @@ SHOWN_POINTS = 60_000  # per panel; more only blurs the picture
 PALETTE_COLORS = 256
 MUTED_COLORS = 12
 CEILING_CUT = 0.85  # share of the room height shown
-BOX_EDGES = [
-    (0, 1),
-    (1, 2),
-    (2, 3),
-    (3, 0),
-    (4, 5),
-    (5, 6),
-    (6, 7),
-    (7, 4),
-    (0, 4),
-    (1, 5),
-    (2, 6),
-    (3, 7),
-]
 
 
 def class_color(name: str) -> tuple[float, float, float]:

@@ -17,7 +17,7 @@ from ontodetect.preprocess import prepare
 from ontodetect.synth import synthesize
 from ontodetect.synth.artefacts import duplicate_floor_layer
 from ontodetect.synth.furniture import make_furniture, place
-from ontodetect.synth.scene import OrientedBox, SceneObject
+from test_recognition import _mesh_obj
 from test_synth_sensors import box_room
 
 #: Surface density of the hand-made scans (points per m²): about a ScanNet room at 50,000
@@ -275,24 +275,6 @@ def test_a_platform_higher_than_a_stair_riser_is_not_floor():
 
 
 # -- detection: the chair is found on its own --------------------------------------------------
-def _mesh_obj(iid, cls, mesh, color):
-    lo, hi = mesh.bounds
-    t = len(mesh.triangles)
-    return SceneObject(
-        iid,
-        cls,
-        cls,
-        mesh.vertices,
-        np.asarray(mesh.triangles, np.int32),
-        np.zeros(t, np.int32),
-        ["body"],
-        np.tile(np.asarray(color, np.uint8), (t, 1)),
-        np.eye(4),
-        {"width": float(hi[0] - lo[0]), "depth": float(hi[1] - lo[1]), "height": float(hi[2])},
-        OrientedBox(tuple((lo + hi) / 2), tuple(hi - lo), 0.0),
-    )
-
-
 def _simulated_curtain_scan():
     x = np.linspace(0.6, 3.4, 120)
     y = 3.38 + 0.04 * np.sin(2 * np.pi * x / 0.15)

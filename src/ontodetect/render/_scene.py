@@ -60,7 +60,8 @@ OBJECT_POINT = 2
 MARGIN = 0.05
 
 _BLACK = (0, 0, 0)
-_EDGES = (
+#: Corner pairs of a box's twelve edges (corners 0-3 at the bottom, 4-7 above them).
+BOX_EDGES = (
     (0, 1),
     (1, 2),
     (2, 3),
@@ -407,7 +408,7 @@ def render_scene(
         color = _rgb8(class_color(box.label))
         if persp is not None:
             xy = persp.pixels(ring)
-            for a, b in _EDGES:
+            for a, b in BOX_EDGES:
                 draw.line((tuple(xy[a]), tuple(xy[b])), fill=color, width=1)
         if top is not None:
             xy = top.pixels(ring[[0, 1, 2, 3, 0]])
@@ -426,22 +427,14 @@ def render_scene(
                 )
     if top is not None:
         _axes(draw, top, top_area, fonts, scale)
-    middle_top = (top_area[0] + top_area[2]) / 2
-    draw.text(
-        (middle_top, top_area[1] - 8 * scale),
-        "top view",
-        fill=_BLACK,
-        font=fonts["axes"],
-        anchor="mb",
-    )
-    middle_persp = (persp_area[0] + persp_area[2]) / 2
-    draw.text(
-        (middle_persp, top_area[1] - 8 * scale),
-        "perspective view",
-        fill=_BLACK,
-        font=fonts["axes"],
-        anchor="mb",
-    )
+    for area, name in ((top_area, "top view"), (persp_area, "perspective view")):
+        draw.text(
+            ((area[0] + area[2]) / 2, top_area[1] - 8 * scale),
+            name,
+            fill=_BLACK,
+            font=fonts["axes"],
+            anchor="mb",
+        )
     if title:
         draw.text((width / 2, 22 * scale), title, fill=_BLACK, font=fonts["title"], anchor="mm")
     labels = sorted({b.label for b in boxes} | set(legend_counts or {}))
