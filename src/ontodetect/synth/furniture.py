@@ -483,6 +483,29 @@ def _four_legs(
             asm.add("leg", _leg(style, sx * x, sy * y, z0, z1, width), color, group=group)
 
 
+def _plinth_or_legs(
+    asm: _Assembly,
+    plinth: bool,
+    w: float,
+    d: float,
+    z0: float,
+    color: NDArray[np.uint8],
+    *,
+    plinth_inset: float,
+    leg_inset: float,
+) -> None:
+    """A low case's base up to ``z0`` under a ``w`` x ``d`` body: a plinth set in by
+    ``plinth_inset`` at the sides and 5 cm at the back, or four tapered legs set in by
+    ``leg_inset`` at the sides and 5 cm front and back."""
+    if plinth:
+        lo = (-w / 2 + plinth_inset, -d / 2, 0.0)
+        hi = (w / 2 - plinth_inset, d / 2 - 0.05, z0 + 0.001)
+        asm.add("base", M.box_between(lo, hi), _shade(color, 0.6), group="body")
+    else:
+        x, y = w / 2 - leg_inset, d / 2 - 0.05
+        _four_legs(asm, "tapered", x, y, 0.0, z0 + 0.001, 0.035, _shade(color, 0.7), group="body")
+
+
 def _tilted_box(lo: ArrayLike, hi: ArrayLike, tilt: float, pivot: ArrayLike) -> M.Mesh:
     """A box given in a frame reclined by ``tilt`` (top towards -y) about ``pivot``.
 
@@ -2178,25 +2201,7 @@ def _cabinet(p: _Params) -> SceneObject:
     handle_color = p.color("handle_color", METAL)
     asm = _Assembly()
     z0 = 0.08 if plinth == "plinth" else 0.12
-    if plinth == "plinth":
-        asm.add(
-            "base",
-            M.box_between((-w / 2 + 0.04, -d / 2, 0.0), (w / 2 - 0.04, d / 2 - 0.05, z0 + 0.001)),
-            _shade(color, 0.6),
-            group="body",
-        )
-    else:
-        _four_legs(
-            asm,
-            "tapered",
-            (w / 2 - 0.04),
-            (d / 2 - 0.05),
-            0.0,
-            z0 + 0.001,
-            0.035,
-            _shade(color, 0.7),
-            group="body",
-        )
+    _plinth_or_legs(asm, plinth == "plinth", w, d, z0, color, plinth_inset=0.04, leg_inset=0.04)
     top_t = 0.025
     y_front = d / 2 - 0.018
     asm.add(
@@ -3293,27 +3298,8 @@ def _tv_stand(p: _Params) -> SceneObject:
     handle_color = p.color("handle_color", METAL)
     asm = _Assembly()
     top_t = 0.025
-    if base == "plinth":
-        z0 = 0.05
-        asm.add(
-            "base",
-            M.box_between((-w / 2 + 0.03, -d / 2, 0.0), (w / 2 - 0.03, d / 2 - 0.05, z0 + 0.001)),
-            _shade(color, 0.6),
-            group="body",
-        )
-    else:
-        z0 = leg_h
-        _four_legs(
-            asm,
-            "tapered",
-            (w / 2 - 0.05),
-            (d / 2 - 0.05),
-            0.0,
-            z0 + 0.001,
-            0.035,
-            _shade(color, 0.7),
-            group="body",
-        )
+    z0 = 0.05 if base == "plinth" else leg_h
+    _plinth_or_legs(asm, base == "plinth", w, d, z0, color, plinth_inset=0.03, leg_inset=0.05)
     y_front = d / 2 - 0.018 - 0.025  # the handles stay within the top's depth
     asm.add(
         "body",
