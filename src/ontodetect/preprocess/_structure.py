@@ -395,6 +395,17 @@ def _shell_runs(c, labels, xy, n2, sample) -> list[StructurePlane]:
     return out
 
 
+def _xy_cells(
+    xy: NDArray[np.float64], cell: float, margin: int
+) -> tuple[NDArray[np.int64], tuple[int, int]]:
+    """Cells of a horizontal grid of edge ``cell`` laid from the frame's origin, numbered
+    so that ``margin`` empty cells border them: the cell of every point (n, 2) and the
+    shape of the grid."""
+    ij = np.floor(xy / cell).astype(np.int64)
+    ij -= ij.min(axis=0) - margin
+    return ij, (int(ij[:, 0].max()) + margin + 1, int(ij[:, 1].max()) + margin + 1)
+
+
 # -- a drifted second floor layer ---------------------------------------------------------
 #: A horizontal sheet at most this high (m) above the floor is floor: a SLAM map that closed
 #: a loop late keeps a copy of part of the floor 2-10 cm above or below it. Nothing looked
@@ -420,9 +431,7 @@ def _floor_layers(
     idx = np.flatnonzero((labels == NONE) & (z >= band) & (z <= FLOOR_LAYER_TOP))
     if len(idx) == 0:
         return 0.0
-    ij = np.floor(c[idx, :2] / FLOOR_LAYER_CELL).astype(np.int64)
-    ij -= ij.min(axis=0) - 1
-    shape = tuple(ij.max(axis=0) + 2)
+    ij, shape = _xy_cells(c[idx, :2], FLOOR_LAYER_CELL, 1)
     flat = np.ravel_multi_index((ij[:, 0], ij[:, 1]), shape)
     size = shape[0] * shape[1]
     zi = z[idx]
@@ -569,9 +578,8 @@ def floor_area(
     pts = centers[(z > -cell) & (z < top), :2]
     if len(pts) == 0:
         return 0.0
-    ij = np.floor(pts / cell).astype(np.int64)
-    ij -= ij.min(axis=0) - (AREA_CLOSING + 1)
-    grid = np.zeros(tuple(ij.max(axis=0) + AREA_CLOSING + 2), dtype=bool)
+    ij, shape = _xy_cells(pts, cell, AREA_CLOSING + 1)
+    grid = np.zeros(shape, dtype=bool)
     grid[ij[:, 0], ij[:, 1]] = True
     grid = ndimage.binary_closing(grid, np.ones((3, 3), dtype=bool), iterations=AREA_CLOSING)
     grid = ndimage.binary_fill_holes(grid)
