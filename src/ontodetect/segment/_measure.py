@@ -105,10 +105,14 @@ OPEN_BELOW_HEIGHT = 0.55
 OPEN_BELOW_RIM = 2
 
 
-def _cell_keys(xy: NDArray[np.float64]) -> NDArray[np.int64]:
-    """One integer per ``FLOOR_CELL`` cell of the points ``xy``."""
-    ij = np.floor(xy / FLOOR_CELL).astype(np.int64)
+def _pack(ij: NDArray[np.int64]) -> NDArray[np.int64]:
+    """One integer per grid cell (i, j)."""
     return (ij[:, 0] << 32) + (ij[:, 1] + (1 << 31))  # a step in j is a step of 1
+
+
+def _cell_keys(xy: NDArray[np.float64], cell: float) -> NDArray[np.int64]:
+    """One integer per ``cell`` cell of the points ``xy``."""
+    return _pack(np.floor(xy / cell).astype(np.int64))
 
 
 def open_below(seg: Segmentation) -> list[list[float]]:
@@ -127,7 +131,7 @@ def open_below(seg: Segmentation) -> list[list[float]]:
     out: list[list[float]] = []
     if not prep.floor_found or not len(floor):
         return [[math.nan] * len(c.planes) for c in seg]
-    seen = np.unique(_cell_keys(floor[:, :2]))
+    seen = np.unique(_cell_keys(floor[:, :2], FLOOR_CELL))
     for c in seg:
         values = []
         centers = np.asarray(c.centers)
@@ -135,7 +139,7 @@ def open_below(seg: Segmentation) -> list[list[float]]:
             if float(plane.tilt) > HORIZONTAL_TILT or float(plane.height) < OPEN_BELOW_HEIGHT:
                 values.append(math.nan)
                 continue
-            use = np.unique(_cell_keys(centers[plane.inliers, :2]))
+            use = np.unique(_cell_keys(centers[plane.inliers, :2], FLOOR_CELL))
             for _ in range(OPEN_BELOW_RIM):
                 inner = use
                 for step in ((1 << 32), -(1 << 32), 1, -1):
@@ -157,29 +161,22 @@ SEEN_BELOW_CELL = 0.05
 SEEN_BELOW_DROP = 0.1
 
 
-def _grid_cells(xy: NDArray[np.float64]) -> NDArray[np.int64]:
-    """One integer per ``SEEN_BELOW_CELL`` cell of the points ``xy``."""
-    ij = np.floor(xy / SEEN_BELOW_CELL).astype(np.int64)
-    return (ij[:, 0] << 32) + (ij[:, 1] + (1 << 31))
-
-
 def _cells_inside(xy: NDArray[np.float64]) -> NDArray[np.int64]:
     """The grid cells whose centres lie inside the convex hull of the points ``xy``
     (the occupied cells themselves when the hull is degenerate)."""
     from scipy.spatial import Delaunay, QhullError
 
-    own = np.unique(_grid_cells(xy))
-    lo = np.floor(xy.min(axis=0) / SEEN_BELOW_CELL).astype(np.int64)
-    hi = np.floor(xy.max(axis=0) / SEEN_BELOW_CELL).astype(np.int64)
+    cells = np.floor(xy / SEEN_BELOW_CELL).astype(np.int64)
+    own = np.unique(_pack(cells))
+    lo, hi = cells.min(axis=0), cells.max(axis=0)
     ii, jj = np.meshgrid(np.arange(lo[0], hi[0] + 1), np.arange(lo[1], hi[1] + 1))
     ij = np.column_stack([ii.ravel(), jj.ravel()])
     try:
-        hull = Delaunay(np.unique(np.floor(xy / SEEN_BELOW_CELL), axis=0) + 0.5)
+        hull = Delaunay(np.unique(cells, axis=0) + 0.5)
     except QhullError:
         return own
     inside = ij[hull.find_simplex(ij + 0.5) >= 0]
-    keys = (inside[:, 0] << 32) + (inside[:, 1] + (1 << 31))
-    return np.union1d(keys, own)
+    return np.union1d(_pack(inside), own)
 
 
 def seen_below(seg: Segmentation) -> list[list[float]]:
@@ -211,7 +208,9 @@ def seen_below(seg: Segmentation) -> list[list[float]]:
                 values.append(0.0)
                 continue
             outline = _cells_inside(centers[plane.inliers, :2])
-            under = np.unique(np.concatenate([_grid_cells(centers[q.inliers, :2]) for q in lower]))
+            under = np.unique(
+                np.concatenate([_cell_keys(centers[q.inliers, :2], SEEN_BELOW_CELL) for q in lower])
+            )
             values.append(float(np.isin(outline, under).mean()))
         out.append(values)
     return out
