@@ -486,3 +486,59 @@ classes:
             "format: ontodetect.ontology/1\nclasses:\n  t:\n    parts:\n"
             "      top: {length: {min: 3, max: 1}}\n"
         )
+
+
+NEAR = """
+format: ontodetect.ontology/1
+classes:
+  bed: {parts: {mattress: {tilt: {max: 6}, height: [0.3, 0.65]}}, cluster: {length: [1.8, 2.3]}}
+  stand:
+    parts: {top: {tilt: {max: 5}, height: [0.4, 0.72]}}
+    cluster: {length: {max: 0.7}}
+    near: [{class: %s, distance: {max: 0.3, soft: 0.2}, missing: 0.2}]
+"""
+
+
+def _box(x, size):
+    from types import SimpleNamespace
+
+    return SimpleNamespace(center=(x, 0.0, 0.3), size=size, yaw=0.0)
+
+
+def test_near_scores_a_stand_by_the_bed_beside_it():
+    from ontodetect.ontology import score_near
+
+    onto = parse_ontology(NEAR % "bed")
+    bed = score_cluster(cluster([P(tilt=1, height=0.5, length=2.0, width=1.4)], length=2.05), onto)
+    stand = score_cluster(
+        cluster([P(tilt=1, height=0.55, length=0.45, width=0.4)], length=0.5), onto
+    )
+    beside = score_near(
+        [bed, stand], [_box(0, (2.05, 1.4, 0.5)), _box(1.35, (0.5, 0.4, 0.6))], onto
+    )
+    alone = score_near([bed, stand], [_box(0, (2.05, 1.4, 0.5)), _box(4.0, (0.5, 0.4, 0.6))], onto)
+    # The class "bed" has no rule: its likelihood is the same, wherever the stand is.
+    assert beside[0].classes["bed"].log_likelihood == bed.classes["bed"].log_likelihood
+    near_bed = beside[1].classes["stand"].log_likelihood
+    assert math.exp(alone[1].classes["stand"].log_likelihood - near_bed) == pytest.approx(
+        0.2 / bed.probabilities["bed"], rel=1e-6
+    )
+    (rule,) = [c for c in alone[1].classes["stand"].constraints if c.part == "near bed"]
+    assert rule.value is None and rule.factor == pytest.approx(0.2)
+    # A scene's order does not change what each cluster scores.
+    swapped = score_near(
+        [stand, bed], [_box(1.35, (0.5, 0.4, 0.6)), _box(0, (2.05, 1.4, 0.5))], onto
+    )
+    assert swapped[0].probabilities == pytest.approx(beside[1].probabilities)
+
+
+def test_near_names_an_unknown_class_and_needs_a_distance():
+    from ontodetect.ontology import score_near
+
+    onto = parse_ontology(NEAR % "bde")
+    s = score_cluster(cluster([P(tilt=1, height=0.55, length=0.45, width=0.4)], length=0.5), onto)
+    with pytest.raises(InvalidOntologyError, match=r"\[classes.stand.near\].*'bde'"):
+        score_near([s], [_box(0, (0.5, 0.4, 0.6))], onto)
+    text = NEAR.replace("distance: {max: 0.3, soft: 0.2}, ", "") % "bed"
+    with pytest.raises(InvalidOntologyError, match=r"\[classes.stand.near.0\].*distance"):
+        parse_ontology(text)

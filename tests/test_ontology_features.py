@@ -59,6 +59,8 @@ def test_sigma_floors_are_those_calibration_used():
         "open_below": 0.03,
         "seen_below": 0.03,
         "behind": 0.02,
+        "aside": 0.02,
+        "across": 1.0,
         "overlap": 0.03,
         "rise": 0.02,
         "planes": 0.5,
@@ -145,6 +147,51 @@ def test_behind_measures_along_a_backrest_s_outward_normal():
     assert behind(desc, 0, 2) == pytest.approx(0.1)
     level = cluster([Facing(0.0, 0.5, 0.4, 0.4, normal=(0.0, 0.0, 1.0)), arm], length=0.5)
     assert behind(level, 0, 1) == 0.0
+
+
+def test_aside_measures_across_the_upright_plane_whichever_comes_first():
+    """A backrest centred behind its seat is 0 aside; a headboard's end beside a
+    nightstand's top is its offset along the headboard; two level planes have no upright."""
+
+    @dataclass(frozen=True)
+    class Facing(P):
+        normal: tuple = (0.0, 1.0, 0.0)
+
+    seat = P(0.0, 0.45, 0.45, 0.42, cx=0.3, cy=0.0)
+    back = Facing(85.0, 0.7, 0.45, 0.4, cx=0.3, cy=0.22)
+    headboard_end = Facing(87.0, 0.6, 0.3, 0.3, cx=0.65, cy=0.22)
+    desc = cluster([seat, back, headboard_end], length=0.8)
+    aside = FEATURES["relation"]["aside"].relation
+    assert aside(desc, 0, 1) == pytest.approx(0.0)
+    assert aside(desc, 1, 0) == pytest.approx(0.0)
+    assert aside(desc, 0, 2) == pytest.approx(0.35)
+    assert aside(desc, 2, 0) == pytest.approx(0.35)
+    level = cluster([seat, P(0.0, 0.7, 0.3, 0.3, cx=1.0)], length=1.0)
+    assert aside(level, 0, 1) == 0.0
+
+
+def test_across_is_the_angle_between_a_seat_s_long_axis_and_the_back_s_run():
+    """A sofa's back runs along its seat (0); a bed's headboard stands across its
+    mattress's end (90); a square cushion, or planes given without axes, are not measured."""
+
+    @dataclass(frozen=True)
+    class Axed(P):
+        normal: tuple = (0.0, 0.0, 1.0)
+        axes: tuple = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0))
+
+    seat = Axed(1.0, 0.42, 1.8, 0.6)  # long along x
+    back = Axed(80.0, 0.7, 1.8, 0.4, cy=0.35, normal=(0.0, 0.98, 0.17))  # runs along x
+    board = Axed(88.0, 0.8, 1.4, 0.5, cx=1.0, normal=(1.0, 0.0, 0.0))  # runs along y
+    desc = cluster([seat, back, board], length=2.0)
+    across = FEATURES["relation"]["across"].relation
+    assert across(desc, 0, 1) == pytest.approx(0.0, abs=1e-6)
+    assert across(desc, 1, 0) == pytest.approx(0.0, abs=1e-6)
+    assert across(desc, 0, 2) == pytest.approx(90.0)
+    turned = Axed(1.0, 0.42, 1.8, 0.6, axes=((0.6, 0.8, 0.0), (-0.8, 0.6, 0.0)))
+    assert across(cluster([turned, board], length=2.0), 0, 1) == pytest.approx(36.87, abs=0.01)
+    assert math.isnan(across(cluster([P(0.0, 0.5, 1.0, 0.3), board], length=1.0), 0, 1))
+    cushion = Axed(1.0, 0.42, 0.62, 0.58)  # about square: no long axis to measure along
+    assert math.isnan(across(cluster([cushion, board], length=1.0), 0, 1))
 
 
 def test_registering_twice_or_without_a_measure_is_refused():

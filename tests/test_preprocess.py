@@ -247,6 +247,68 @@ def test_structure_and_object_mask(rng):
     assert scene.centers[scene.object_mask, 2].max() <= 1.4
 
 
+#: Walls as tall as a scan that stops low (off by default: docs/benchmarks.md, "Walls in
+#: a scan that stops low").
+LOW_SCAN = Config().with_overrides(["prepare.low_scan_walls=true"])
+
+
+@pytest.mark.parametrize("top", [1.3, 1.45])
+def test_a_small_room_scanned_only_to_chest_height_has_its_walls(rng, top):
+    # A bathroom seen by a sensor that stops at 1.3-1.45 m: its walls reach no higher than
+    # the scan, a bath and a WC stand against them and the corridor shows through the door
+    # (so a wall is not a low wall with nothing behind it). Every wall is still wall, and
+    # what stands against one is not joined to it.
+    w, d = 3.6, 2.1
+    walls = [  # the wall at y = 0 has a door, and the corridor shows through it
+        rect(rng, (0, 0, 0), (1.4, 0, 0), (0, 0, top), 0.03),
+        rect(rng, (2.2, 0, 0), (w - 2.2, 0, 0), (0, 0, top), 0.03),
+        rect(rng, (0, d, 0), (w, 0, 0), (0, 0, top), 0.03),
+        rect(rng, (0, 0, 0), (0, d, 0), (0, 0, top), 0.03),
+        rect(rng, (w, 0, 0), (0, d, 0), (0, 0, top), 0.03),
+    ]
+    bath = box(rng, (0.0, d - 0.7, 0.0), (1.8, d, 0.55), 0.02)
+    wc = box(rng, (2.8, d - 0.6, 0.0), (3.2, d, 0.75), 0.02)
+    floor = rect(rng, (0, 0, 0), (w, 0, 0), (0, d, 0), 0.03)
+    corridor = np.vstack(
+        [
+            rect(rng, (1.2, -0.8, 0), (1.2, 0, 0), (0, 0.8, 0), 0.03),
+            rect(rng, (1.2, -0.8, 0), (1.2, 0, 0), (0, 0, top), 0.03),
+        ]
+    )
+    pts = np.vstack([floor, *walls, bath, wc, corridor])
+    kinds = np.repeat(
+        ["floor", "wall", "furniture", "corridor"],
+        [len(floor), sum(map(len, walls)), len(bath) + len(wc), len(corridor)],
+    )
+    # By default a wall must reach 1.5 m: the one with the door, the corridor behind it,
+    # is lost.
+    plain = prepare(pts)
+    default = np.append(plain.structure_label, -1)[plain.point_to_voxel]
+    assert np.mean(default[kinds == "wall"] == 2) < 0.9
+    scene = prepare(pts, LOW_SCAN)
+    assert sum(p.kind == "wall" for p in scene.structure_planes) >= 4
+    label = np.append(scene.structure_label, -1)[scene.point_to_voxel]
+    assert np.mean(label[kinds == "wall"] == 2) > 0.9
+    # What of the bath and the WC stands off the wall (all but their backs) is not wall.
+    x, y = pts[:, 0], pts[:, 1]
+    off_wall = (kinds == "furniture") & (y < d - 0.06) & (x > 0.06) & (x < w - 0.06)
+    assert np.mean(label[off_wall] == 0) > 0.95
+
+
+def test_a_cabinet_in_a_room_scanned_to_chest_height_is_no_wall(rng):
+    # Lowering the top a wall must reach to the scan's own top does not make a free-standing
+    # cabinet a wall: the room lies behind it as well as in front.
+    pts, _ = room(rng, size=(5.0, 4.0))
+    cabinet = box(rng, (2.0, 1.8, 0.0), (3.2, 2.3, 1.3), 0.02)
+    pts = np.vstack([pts[pts[:, 2] <= 1.4], cabinet])
+    scene = prepare(pts, LOW_SCAN)
+    walls = [p for p in scene.structure_planes if p.kind == "wall"]
+    assert len(walls) == 4
+    assert all(
+        min(abs(p.offset), abs(abs(p.offset) - 4.0), abs(abs(p.offset) - 5.0)) < 0.1 for p in walls
+    )
+
+
 def test_walls_do_not_depend_on_where_the_scan_sits(rng):
     # Walls a little out of true (a drifting scan): each cell's normal is off by a degree
     # or so, which must not split or lose a wall when the scan sits far from the origin.

@@ -288,6 +288,12 @@ class PrepareConfig(_Section):
     wall_band: float = _param(
         0.04, NON_NEGATIVE, "Voxels within this distance (m) of a wall plane are wall."
     )
+    low_scan_walls: bool = _param(
+        False,
+        Boolean(),
+        "In a scan that stops below 1.5 m (its 99th height percentile), a wall need only "
+        "reach to within a cell of the scan's top.",
+    )
     # Open-plan rooms: glazing and curtains show no wall plane, and a SLAM map that closed
     # a loop late keeps a drifted copy of part of the floor (issue 20).
     shell_walls: bool = _param(

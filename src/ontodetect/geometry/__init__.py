@@ -4,7 +4,7 @@ overlap, shape checks for point arrays, and plain JSON values.
 
 - :func:`yaw_pose`, :func:`canonical_sign`: rigid transforms and the one sign rule.
 - :class:`LevelFrame`, :func:`level_transform`, :func:`rotation_between`: the levelled frame.
-- :func:`box_corners`, :func:`box_footprint`: upright boxes.
+- :func:`box_corners`, :func:`box_footprint`, :func:`footprint_gap`: upright boxes.
 - :func:`point_overlap`: point IoU and intersections between sets of point rows.
 - :func:`as_points`: the (n, 3) check at a stage's boundary.
 - :func:`jsonable`: plain JSON values, optionally rounded.
@@ -13,7 +13,7 @@ overlap, shape checks for point arrays, and plain JSON values.
 
 from __future__ import annotations
 
-from ._box import box_corners, box_footprint
+from ._box import box_corners, box_footprint, footprint_gap
 from ._frame import LevelFrame, level_transform, rotation_between, unit_direction
 from ._json import jsonable
 from ._mesh import Mesh
@@ -30,6 +30,7 @@ __all__ = [
     "box_corners",
     "box_footprint",
     "canonical_sign",
+    "footprint_gap",
     "jsonable",
     "level_transform",
     "point_overlap",

@@ -7,7 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["box_corners", "box_footprint"]
+__all__ = ["box_corners", "box_footprint", "footprint_gap"]
 
 
 def box_corners(center: Sequence[float], size: Sequence[float], yaw: float) -> NDArray[np.float64]:
@@ -39,3 +39,43 @@ def box_footprint(
     [-1.0, -0.5]
     """
     return box_corners(center, size, yaw)[:4, :2]
+
+
+def footprint_gap(a: NDArray[np.float64], b: NDArray[np.float64]) -> float:
+    """Horizontal gap (m) between two convex footprints (``(k, 2)`` corners in order, as
+    :func:`box_footprint` gives them): 0 when they touch or overlap, else the shortest
+    distance between their outlines.
+
+    Examples
+    --------
+    >>> bed = box_footprint([0, 0, 0.3], [2.0, 1.0, 0.6], 0.0)
+    >>> stand = box_footprint([0.8, 0.85, 0.3], [0.4, 0.4, 0.6], 0.0)
+    >>> round(footprint_gap(bed, stand), 3)
+    0.15
+    >>> footprint_gap(bed, box_footprint([0.9, 0.4, 0.3], [0.4, 0.4, 0.6], 0.0))
+    0.0
+    """
+    a = np.asarray(a, dtype=np.float64)
+    b = np.asarray(b, dtype=np.float64)
+    # Separating axes: the edge normals of both; none separates, the footprints overlap.
+    apart = False
+    for poly in (a, b):
+        edges = np.roll(poly, -1, axis=0) - poly
+        for nx, ny in np.c_[-edges[:, 1], edges[:, 0]]:
+            pa, pb = a @ (nx, ny), b @ (nx, ny)
+            if pa.max() < pb.min() or pb.max() < pa.min():
+                apart = True
+                break
+        if apart:
+            break
+    if not apart:
+        return 0.0
+
+    def to_edges(points: NDArray[np.float64], poly: NDArray[np.float64]) -> float:
+        start = poly
+        step = np.roll(poly, -1, axis=0) - poly
+        rel = points[:, None, :] - start[None]
+        t = np.clip((rel * step).sum(-1) / np.maximum((step * step).sum(-1), 1e-18), 0.0, 1.0)
+        return float(np.linalg.norm(rel - t[..., None] * step, axis=-1).min())
+
+    return min(to_edges(a, b), to_edges(b, a))

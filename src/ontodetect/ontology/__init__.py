@@ -31,12 +31,14 @@ from ._features import (
     sigma_floor,
 )
 from ._gaussian import Gaussian
+from ._near import score_near
 from ._schema import (
     CAD_ROLES,
     Attach,
     ClusterRule,
     LabelModel,
     LowSeed,
+    NearRule,
     ObjectClass,
     Ontology,
     Part,
@@ -78,6 +80,7 @@ __all__ = [
     "Gaussian",
     "LabelModel",
     "LowSeed",
+    "NearRule",
     "ObjectClass",
     "Ontology",
     "Part",
@@ -103,6 +106,7 @@ __all__ = [
     "rooms_from_objects",
     "score_class",
     "score_cluster",
+    "score_near",
     "sigma_floor",
     "with_priors",
 ]

@@ -185,6 +185,49 @@ def _behind(desc: Any, i: int, j: int) -> float:
     return float(normal @ step) / size
 
 
+def _aside(desc: Any, i: int, j: int) -> float:
+    """How far (m) the two centroids lie apart along the upright one of the two planes
+    (a's if it faces sideways, else b's), horizontally and across its normal: 0 when b
+    stands centred before or behind a, as a backrest on its seat's middle line."""
+    a, b = desc.planes[i], desc.planes[j]
+    normal = np.asarray(a.normal, dtype=float)[:2]
+    if float(np.hypot(*normal)) < _FACING:
+        normal = np.asarray(b.normal, dtype=float)[:2]
+    size = float(np.hypot(*normal))
+    if size < _FACING:
+        return 0.0
+    along = np.array([-normal[1], normal[0]]) / size
+    step = np.asarray(b.centroid, dtype=float)[:2] - np.asarray(a.centroid, dtype=float)[:2]
+    return abs(float(along @ step))
+
+
+#: A level plane has a long axis when it is at least this many times longer than wide
+#: (a mattress is twice as long as wide; one cushion of a sofa's seat is about square).
+_LONG = 1.25
+
+
+def _across(desc: Any, i: int, j: int) -> float:
+    """Angle (degrees, 0..90) between the long axis of the level plane of the two and the
+    horizontal run of the upright one: 0 for a sofa's back along its seat, 90 for a bed's
+    headboard across the end of its mattress; 0 unless one is level and the other upright,
+    NaN (not measured) when the level one has no long axis or comes without its axes."""
+    a, b = desc.planes[i], desc.planes[j]
+    if float(a.tilt) > float(b.tilt):
+        a, b = b, a
+    if float(a.tilt) > 45.0 or float(b.tilt) < 45.0:
+        return 0.0
+    axes = getattr(a, "axes", None)
+    if axes is None or float(a.length) < _LONG * float(a.width):
+        return math.nan  # no long axis to speak of (one cushion of a sofa), or none given
+    long = np.asarray(axes, dtype=float)[0][:2]
+    normal = np.asarray(b.normal, dtype=float)[:2]
+    if float(np.hypot(*long)) < 1e-9 or float(np.hypot(*normal)) < 1e-9:
+        return 0.0
+    run = np.array([-normal[1], normal[0]])
+    cos = abs(float(long @ run)) / (float(np.hypot(*long)) * float(np.hypot(*run)))
+    return math.degrees(math.acos(min(1.0, cos)))
+
+
 def _rise_above(desc: Any, i: int) -> float:
     """Height of the cluster above the highest inlier of plane ``i`` (m, at least 0)."""
     return max(0.0, float(desc.height) - float(desc.planes[i].z_max))
@@ -250,6 +293,15 @@ for _feature in (
     Feature("behind", "relation", "Pr",
             "horizontal distance of b's centroid behind plane a, along a's outward normal "
             "(m; negative in front of it)", 0.02, relation=_behind),
+    Feature("across", "relation", "Pr",
+            "angle between the long axis of the level plane and the run of the upright "
+            "one (degrees, 0..90): 0 for a sofa's back along its seat; not measured on a "
+            "level plane less than 1.25 times longer than wide", 1.0,
+            relation=_across),
+    Feature("aside", "relation", "Pr",
+            "horizontal distance between the centroids along the upright plane of the two, "
+            "across its normal (m): 0 for a backrest centred on its seat", 0.02,
+            relation=_aside),
     Feature("overlap", "relation", "Pr",
             "share of the smaller footprint the two overlap in the xy plane (0..1)", 0.03,
             relation=_relation_attribute("xy_overlap", 0.0)),

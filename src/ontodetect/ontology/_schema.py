@@ -111,6 +111,21 @@ class Relation:
 
 
 @dataclass(frozen=True)
+class NearRule:
+    """Another object this class stands beside (a relation between objects, the thesis's
+    exteroceptive constraints): a nightstand beside a bed.
+
+    ``distance`` scores the horizontal gap between the two footprints (m); the factor a
+    cluster gets is the best, over the other clusters, of their probability of being
+    ``target`` times that score, and at least ``missing`` (what having no such object
+    beside it costs)."""
+
+    target: str
+    distance: Gaussian
+    missing: float
+
+
+@dataclass(frozen=True)
 class Attach:
     """Which narrow horizontal parts a little above a seed join it (armrests, back tops).
 
@@ -240,6 +255,9 @@ class ObjectClass:
     #: Classes near which this one is more likely (the labelling's context term: a chair
     #: near a table).
     context: tuple[str, ...] = ()
+    #: Objects this class stands beside (:class:`NearRule`), scored once every cluster of
+    #: the scene has been (``ontology.score_near``).
+    near: tuple[NearRule, ...] = ()
     #: Bounds of the factor CAD fitting may stretch a model's footprint by to the object's
     #: measured seat or top; ``None``: the footprint keeps its generic size.
     cad_scale: tuple[float, float] | None = None
@@ -728,6 +746,19 @@ def _relation(spec: Any, path: tuple[Any, ...], parts: set[str]) -> Relation:
     return Relation(a=between[0], b=between[1], constraints=constraints)
 
 
+def _near(spec: Any, path: tuple[Any, ...]) -> NearRule:
+    spec = _mapping(spec, path)
+    _only(spec, {"class", "distance", "missing", "description"}, path)
+    target = spec.get("class")
+    if not isinstance(target, str) or not target:
+        raise _Problem(path + ("class",), f"expected a class name, got {target!r}")
+    if "distance" not in spec:
+        raise _Problem(path, "expected a distance: how far from it the object stands")
+    missing = _probability(spec, "missing", path, 1.0)
+    assert missing is not None
+    return NearRule(target, _gaussian(spec["distance"], path + ("distance",)), missing)
+
+
 def _labeling(spec: Any, path: tuple[Any, ...]) -> LabelModel:
     spec = _mapping(spec, path)
     _only(spec, {"color", "plane_size"}, path)
@@ -791,6 +822,7 @@ def _class(name: str, spec: Any, path: tuple[Any, ...], seeds: Mapping[str, Any]
             "extra_plane",
             "extra_surface",
             "context",
+            "near",
             "cad",
         },
         path,
@@ -823,6 +855,10 @@ def _class(name: str, spec: Any, path: tuple[Any, ...], seeds: Mapping[str, Any]
     context = spec.get("context", [])
     if not isinstance(context, list) or not all(isinstance(m, str) and m for m in context):
         raise _Problem(path + ("context",), f"expected a list of class names, got {context!r}")
+    near_spec = spec.get("near") or []
+    if not isinstance(near_spec, list):
+        raise _Problem(path + ("near",), "expected a list of objects it stands beside")
+    near = tuple(_near(r, path + ("near", i)) for i, r in enumerate(near_spec))
     cad = _mapping(spec.get("cad"), path + ("cad",))
     _only(cad, {"scale"}, path + ("cad",))
     cad_scale = _pair(cad["scale"], path + ("cad", "scale")) if "scale" in cad else None
@@ -842,6 +878,7 @@ def _class(name: str, spec: Any, path: tuple[Any, ...], seeds: Mapping[str, Any]
         extra_plane=extra,
         extra_surface=surface,
         context=tuple(context),
+        near=near,
         cad_scale=cad_scale,
     )
 

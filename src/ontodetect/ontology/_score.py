@@ -227,6 +227,8 @@ def plane_feature(plane: Any, feature: str) -> float:
 
 
 def _relation_feature(desc: ClusterDescription, i: int, j: int, feature: str) -> float:
+    """The value of a relation feature between planes ``i`` and ``j``; NaN when it cannot
+    be measured on them (planes without in-plane axes), costing nothing."""
     return FEATURES["relation"][feature].relation(desc, i, j)  # type: ignore[misc]
 
 
@@ -360,7 +362,9 @@ def _combo_log(
         if ia is None or ib is None:
             continue
         for feature, g in rel.constraints.items():
-            total += float(g.log(_relation_feature(desc, ia, ib, feature)))
+            value = _relation_feature(desc, ia, ib, feature)
+            if not math.isnan(value):  # not measured: no factor
+                total += float(g.log(value))
     return total
 
 
@@ -497,6 +501,9 @@ def score_class(
         name = f"{rel.a}~{rel.b}"
         for feature, g in rel.constraints.items():
             value = _relation_feature(desc, ia, ib, feature)
+            if math.isnan(value):  # not measured: no factor
+                constraints.append(ConstraintValue(name, feature, "Pr", None, g, 1.0))
+                continue
             f = float(g(value))
             factors[rel.b]["Pr"] *= f
             constraints.append(ConstraintValue(name, feature, "Pr", value, g, f))

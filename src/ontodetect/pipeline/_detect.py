@@ -39,6 +39,7 @@ from ..ontology import (
     room_distribution,
     rooms_from_objects,
     score_cluster,
+    score_near,
     with_priors,
 )
 from ..preprocess import Ground, GroundPlane, find_ground, floor_area, smooth_depth
@@ -460,6 +461,10 @@ def _one_pass(
                     score_cluster(desc, ontology, shared.priors, none_likelihood=d.none_likelihood)
                 )
                 advance(1)
+        # What stands beside each cluster (a nightstand by a bed), once all are scored.
+        scores = score_near(
+            scores, [c.box for c in seg], ontology, none_likelihood=d.none_likelihood
+        )
         timings["score"] = time.perf_counter() - t0
 
     if not label:

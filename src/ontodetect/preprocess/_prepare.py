@@ -677,6 +677,7 @@ def prepare(
             floor_area=floor.area,
             shell_walls=cfg.shell_walls,
             floor_layers=cfg.floor_layers,
+            low_scan_walls=cfg.low_scan_walls,
         )
     else:
         labels = np.zeros(len(grid), dtype=np.int8)

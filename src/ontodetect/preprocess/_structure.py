@@ -38,8 +38,13 @@ AZIMUTH_TOLERANCE = 5.0
 WALL_GAP = 0.6
 #: Share of the scene allowed behind a wall (through open doors and windows).
 MAX_BEHIND_WALL = 0.1
-#: Walls rise above furniture: their top must be at least this high (m).
+#: Walls rise above furniture: their top must be at least this high (m), or, with
+#: ``low_scan_walls``, reach to within a cell of the scan's top where the scan stops lower
+#: (a sensor that sees a small room only to 1.4 m sees its walls that far and no farther).
 MIN_WALL_TOP = 1.5
+#: The scan's top: this quantile of the voxels' heights (a shower head or a shelf seen
+#: higher than the rest does not raise it).
+SCAN_TOP = 0.99
 #: A wall seen only up to furniture height (scans that stop at 1 m) must be at least this
 #: tall (m) and have at most this share of the scene behind it.
 LOW_WALL_HEIGHT = 0.6
@@ -121,6 +126,7 @@ def _walls(
     min_length: float,
     min_height: float,
     band: float,
+    min_top: float = MIN_WALL_TOP,
 ) -> list[StructurePlane]:
     from scipy import ndimage  # heavy: imported when used (start-up)
 
@@ -186,11 +192,12 @@ def _walls(
             min_length=min_length,
             min_height=min_height,
             band=band,
+            min_top=min_top,
         )
     return walls
 
 
-def _wall_segments(ctr, nrm, sample, cell, *, min_length, min_height, band):
+def _wall_segments(ctr, nrm, sample, cell, *, min_length, min_height, band, min_top):
     sign = np.sign(nrm @ nrm[0])
     n = (nrm * sign[:, None]).mean(axis=0)
     n[2] = 0.0
@@ -217,7 +224,7 @@ def _wall_segments(ctr, nrm, sample, cell, *, min_length, min_height, band):
         height = float(zz.max() - zz.min()) + cell
         if length < min_length:
             continue
-        tall = tall_ok and height >= min_height and zz.max() + cell / 2 >= MIN_WALL_TOP
+        tall = tall_ok and height >= min_height and zz.max() + cell / 2 >= min_top
         if not tall:
             # A wall scanned only part of the way up: nothing may lie behind it, or it
             # is the back of a sofa or a cabinet standing against the real wall.
@@ -481,6 +488,7 @@ def find_structure(
     floor_area: float = 0.0,
     shell_walls: bool = False,
     floor_layers: bool = True,
+    low_scan_walls: bool = False,
 ) -> tuple[NDArray[np.int8], list[StructurePlane]]:
     """Label voxels as floor, wall, ceiling or none in a levelled scene.
 
@@ -508,6 +516,10 @@ def find_structure(
     floor_layers : bool
         Also take as floor large thin horizontal sheets just above it (a drifted copy of
         the floor in a SLAM map).
+    low_scan_walls : bool
+        In a scan that stops lower than a wall's least top (its ``SCAN_TOP`` height
+        quantile below ``MIN_WALL_TOP`` and a cell), a wall need only reach to within a
+        cell of the scan's top, and be as tall as it can be from near the floor.
 
     Returns
     -------
@@ -529,8 +541,18 @@ def find_structure(
     if floor_layers:
         _floor_layers(c, labels, band=floor_band, min_area=min_floor_area)
     sample = c[:: max(1, len(c) // 100_000)]
+    # With low_scan_walls, where the scan stops lower than a wall's least top, a wall
+    # reaches to the scan's top and is as tall as it can be from near the floor.
+    min_top = MIN_WALL_TOP
+    if low_scan_walls:
+        min_top = min(min_top, float(np.quantile(c[:, 2], SCAN_TOP)) - cells.cell)
     walls = _walls(
-        cells, sample, min_length=min_wall_length, min_height=min_wall_height, band=wall_band
+        cells,
+        sample,
+        min_length=min_wall_length,
+        min_height=min(min_wall_height, min_top - cells.cell),
+        band=wall_band,
+        min_top=min_top,
     )
     # Cells at corners and along the floor hold two planes and are not planar: a wall's
     # cells stop about one cell short of its true ends.
