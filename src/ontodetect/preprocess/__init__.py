@@ -52,7 +52,13 @@ from ._prepare import (
     scale_from_travel,
     surface_spacing,
 )
-from ._reconstruct import MESH_METHODS, SurfaceMesh, reconstruct_surface, scene_surface
+from ._reconstruct import (
+    MESH_METHODS,
+    SENSOR_HEIGHT,
+    SurfaceMesh,
+    reconstruct_surface,
+    scene_surface,
+)
 from ._structure import STRUCTURE_LABELS, StructurePlane, find_structure, floor_area
 from ._surface import estimate_normals, graph_normals, smooth_surface
 from ._voxel import VoxelGrid, grouped_covariance, voxelize
@@ -60,6 +66,7 @@ from ._voxel import VoxelGrid, grouped_covariance, voxelize
 __all__ = [
     "AXES",
     "MESH_METHODS",
+    "SENSOR_HEIGHT",
     "STRUCTURE_LABELS",
     "CellPlanes",
     "FloorFit",
