@@ -82,9 +82,11 @@ def mesh_graph(
     the mesh when vertices of theirs share a triangle (a point that owns no vertex is
     adjacent to the owner of its nearest vertex). A pair of the radius graph is kept
     when the mesh joins its points within ``ceil(GEODESIC_SLACK * radius / mesh.cell)``
-    steps: neighbours along the scanned surface stay neighbours, while two objects a
-    few centimetres apart through the air (a chair and the table it stands at), which
-    the radius graph joins, part.
+    steps: neighbours along the scanned surface stay neighbours, while two objects
+    apart through the air (a chair and the table it stands at), which the radius graph
+    joins, part. A gap of up to about four cells in one surface looks like a hole
+    between samples and the mesh bridges it (:func:`reconstruct_surface` fills
+    ``TANGENTIAL_CELLS`` past the last points on each side).
 
     Parameters
     ----------
@@ -109,10 +111,10 @@ def mesh_graph(
     >>> from ontodetect.preprocess import reconstruct_surface
     >>> g = np.stack(np.meshgrid(np.arange(20), np.arange(20)), -1).reshape(-1, 2) * 0.02
     >>> a = np.c_[g, np.zeros(len(g))]
-    >>> pts = np.vstack([a, a + [0.43, 0, 0]])   # two sheets 5 cm apart
+    >>> pts = np.vstack([a, a + [0.48, 0, 0]])   # two sheets 10 cm apart
     >>> mesh = reconstruct_surface(pts, viewpoint=(0.4, 0.2, 1.0))
-    >>> euclidean_clusters(pts, 0.06).max(), euclidean_clusters(
-    ...     pts, 0.06, graph=mesh_graph(pts, mesh, 0.06)).max()
+    >>> euclidean_clusters(pts, 0.12).max(), euclidean_clusters(
+    ...     pts, 0.12, graph=mesh_graph(pts, mesh, 0.12)).max()
     (np.int64(0), np.int64(1))
     """
     pts = as_points(points)
