@@ -56,6 +56,8 @@ MAX_CELLS = 2_000_000
 NODE_BLOCK = 100_000
 #: Nodes whose signed distance is computed at a time.
 QUERY_BLOCK = 200_000
+#: The grid's first node lies this many cells below the lowest point.
+GRID_MARGIN = 2.5
 #: Bits per axis of a packed grid key (a cube of 2^21 cells a side: 20 km at 1 cm).
 _KEY_BITS = 21
 #: Poisson: octree depth cap (a 2^10 grid a side), and the share of vertices with the
@@ -418,8 +420,13 @@ def reconstruct_surface(
         return _poisson(pts, nrm, rgb, cell)
     from scipy.spatial import cKDTree  # heavy: imported when used (start-up)
 
-    # The grid is laid from a corner one cell below the points (keys stay non-negative).
-    origin = (np.floor(pts.min(axis=0) / cell) - 2) * cell
+    # The grid is laid from the points' own lowest corner, as the voxel grid is: a scan
+    # moved by any offset meets the same grid, where multiples of the cell from 0 would cut
+    # it elsewhere. Two and a half cells below it: keys stay non-negative, and a flat bottom
+    # (a floor, a box's face) lies halfway between nodes, not on them, where the sign of
+    # a distance of 0 would decide.
+    low = pts.min(axis=0)
+    origin = low - GRID_MARGIN * cell
     requested, capped = cell, False
     while True:
         ijk = np.floor((pts - origin) / cell).astype(np.int64)
@@ -434,7 +441,7 @@ def reconstruct_surface(
         if len(cells) <= max_cells:
             break
         cell *= math.sqrt(len(cells) / max_cells) * 1.05
-        origin = (np.floor(pts.min(axis=0) / cell) - 2) * cell
+        origin = low - GRID_MARGIN * cell
         capped = True
     keys = _grid_nodes(_unpack(cells))
     tree = cKDTree(pts)
