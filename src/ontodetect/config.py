@@ -371,6 +371,14 @@ class ClusterConfig(_Section):
     max_grow: float = _param(1.2, POSITIVE, "Parts claim voxels up to this path length (m) away.")
     # Region growing: neighbours join while their normals differ by less than this.
     smoothness: float = _param(15.0, ANGLE, "Region growing: largest normal change (deg).")
+    # Alg. 1 step 2 meshes the scan before segmenting it. Opt-in: on the generalization
+    # benchmark it did not pay its way (docs/benchmarks.md, "Surface reconstruction").
+    adjacency: str = _param(
+        "radius",
+        OneOf(("radius", "mesh")),
+        "Clustering graph: 'radius' (voxels within the radius) or 'mesh' (those pairs the "
+        "surface mesh of the object voxels also joins).",
+    )
 
 
 @dataclass(frozen=True)

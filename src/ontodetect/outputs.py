@@ -28,9 +28,11 @@ from .io import (
     read_cloud,
     staged_folder,
     write_cloud,
+    write_mesh,
 )
 from .io._detections import write_detections
 from .pipeline import Result, detect
+from .preprocess import SurfaceMesh, scene_surface
 from .render import BoxDrawing, class_color, render_scene
 
 __all__ = [
@@ -43,6 +45,7 @@ __all__ = [
     "explain",
     "labelled_cloud",
     "labelled_comments",
+    "surface_mesh",
     "write_outputs",
 ]
 
@@ -60,6 +63,8 @@ UNLABELLED_GREY = 128
 UNLABELLED_FADE = 0.5
 #: The names of our per-point fields (CloudCompare loads ``scalar_*`` PLY properties).
 SCALAR_FIELDS = ("scalar_label", "scalar_instance", "scalar_score")
+#: File name of the surface mesh (``write_outputs(mesh=True)``, ``detect --mesh``).
+MESH_FILE = "mesh.ply"
 #: Points coloured at a time for the labelled cloud.
 COLOR_BLOCK = 1 << 20
 
@@ -72,6 +77,7 @@ class OutputFiles:
     labelled: Path
     picture: Path | None
     exports: tuple[Path, ...] = ()
+    mesh: Path | None = None
 
 
 def _free_name(name: str, taken: set[str]) -> str:
@@ -160,6 +166,24 @@ def labelled_comments(result: Result, cloud: PointCloud) -> list[str]:
     return lines
 
 
+def surface_mesh(result: Result, *, method: str = "marching_cubes") -> SurfaceMesh:
+    """A triangle mesh of the whole scan, in the input file's frame and units.
+
+    The voxel cloud of the result's prepared scene meshed by
+    :func:`ontodetect.preprocess.scene_surface` (marching cubes at the scene's sampling
+    spacing, vertex colours when the scan has colours), then moved back from the levelled
+    frame as boxes and parts are.
+    """
+    prepared = result.segmentation.prepared
+    levelled = scene_surface(prepared, method=method)
+    vertices = (
+        prepared.from_level(levelled.vertices) if len(levelled.vertices) else levelled.vertices
+    )
+    mirrored = np.linalg.det(np.asarray(prepared.to_level)[:3, :3]) < 0
+    triangles = levelled.triangles[:, ::-1].copy() if mirrored else levelled.triangles
+    return SurfaceMesh(vertices, triangles, levelled.colors, levelled.cell, dict(levelled.info))
+
+
 def check_output_options(labelled_format: str, exports: tuple[str, ...]) -> None:
     """Refuse an unknown labelled format or exporter before any work is done."""
     if labelled_format not in LABELLED_FORMATS:
@@ -180,6 +204,7 @@ def write_outputs(
     labelled_format: str = "ply",
     exports: tuple[str, ...] = ("boxes",),
     also: Callable[[Path], object] | None = None,
+    mesh: bool = False,
 ) -> OutputFiles:
     """Write ``detections.json``, ``timings.json``, the labelled cloud, the exports and
     ``detections.png`` into ``out_dir``, all or nothing.
@@ -191,7 +216,8 @@ def write_outputs(
     :data:`ontodetect.io.EXPORTERS` to run beside detections.json (``boxes``: boxes.txt;
     ``scannet``: the ScanNet benchmark's instance files). ``also(folder)``, when given,
     writes more files of the same run (the CAD object map) into the staging folder, so
-    that they are swapped in with the rest. docs/outputs.md lists every file.
+    that they are swapped in with the rest. ``mesh`` adds ``mesh.ply``, a triangle mesh of
+    the scan (:func:`surface_mesh`). docs/outputs.md lists every file.
     """
     check_output_options(labelled_format, exports)
     final = Path(out_dir)
@@ -204,6 +230,18 @@ def write_outputs(
             labelled_format=labelled_format,
             exports=exports,
         )
+        mesh_path = None
+        if mesh:
+            surface = surface_mesh(result)
+            mesh_path = write_mesh(
+                stage / MESH_FILE,
+                surface.vertices,
+                surface.triangles,
+                surface.colors,
+                comments=[
+                    f"ontodetect mesh {surface.info.get('method', '')} cell {surface.cell:.6g}"
+                ],
+            )
         if also is not None:
             also(stage)
     return OutputFiles(
@@ -211,6 +249,7 @@ def write_outputs(
         final / files.labelled.name,
         None if files.picture is None else final / files.picture.name,
         tuple(final / p.relative_to(stage) for p in files.exports),
+        None if mesh_path is None else final / mesh_path.name,
     )
 
 

@@ -170,6 +170,12 @@ def detect(
         "OpenPCDet/mmdetection3d layout), scannet (ScanNet benchmark instance files); "
         "'' for none.",
     ),
+    mesh: bool = typer.Option(
+        False,
+        "--mesh",
+        help="Also write mesh.ply: a triangle mesh of the scan (marching cubes on the voxel "
+        "cloud, vertex colours; docs/outputs.md).",
+    ),
     cad: bool = typer.Option(
         False,
         "--cad",
@@ -177,7 +183,8 @@ def detect(
         "(object_map.ply, object_map.glb) and add 'cad' to detections.json.",
     ),
 ) -> None:
-    """Detect objects; write detections.json, labelled.ply, boxes.txt and detections.png."""
+    """Detect objects; write detections.json, labelled.ply, boxes.txt and detections.png
+    (and mesh.ply with --mesh)."""
     from ..outputs import check_output_options, explain, write_outputs  # lazy: CLI start-up
     from ..pipeline import detect as run_detect  # lazy: CLI start-up
 
@@ -207,9 +214,9 @@ def detect(
     inputs = expand_inputs(paths)
     options = {"config": cfg, "ontology": onto, "room": room_arg, "indoor": indoor, "seed": seed}
     if tile is not None:
-        if len(inputs) > 1 or cad or explain_ is not None:
+        if len(inputs) > 1 or cad or mesh or explain_ is not None:
             raise typer.BadParameter(
-                "takes one scan, without --cad and --explain", param_hint="--tile"
+                "takes one scan, without --cad, --mesh and --explain", param_hint="--tile"
             )
         _detect_tiled(
             inputs[0],
@@ -238,6 +245,7 @@ def detect(
             picture=picture,
             labelled_format=labelled_format.lower(),
             exports=exports,
+            mesh=mesh,
         )
         return
     path = inputs[0]
@@ -272,6 +280,7 @@ def detect(
             labelled_format=labelled_format.lower(),
             exports=exports,
             also=also,
+            mesh=mesh,
         )
         object_map = also
     if as_json:
@@ -280,7 +289,7 @@ def detect(
         doc["classes"] = result.class_names
         doc["files"] = [
             str(p)
-            for p in (files.detections, files.labelled, *files.exports, files.picture)
+            for p in (files.detections, files.labelled, *files.exports, files.picture, files.mesh)
             if p is not None
         ] + (["object_map.ply", "object_map.glb"] if object_map is not None else [])
         if explain_ is not None:
@@ -310,6 +319,7 @@ def detect(
         f"wrote {files.detections}, {files.labelled}"
         + "".join(f", {p}" for p in files.exports)
         + (f", {files.picture}" if files.picture else "")
+        + (f", {files.mesh}" if files.mesh else "")
         + (", object_map.ply, object_map.glb" if object_map is not None else "")
     )
     if state.verbose:

@@ -87,6 +87,7 @@ __all__ = [
     "write_box_table",
     "write_cloud",
     "write_detections",
+    "write_mesh",
     "write_scannet_instances",
 ]
 
@@ -368,3 +369,18 @@ def write_cloud(
             p, f"format {fmt!r} cannot be written", supported_formats("write")
         )
     return WRITERS[fmt](p, cloud, **options)
+
+
+def write_mesh(
+    path: str | os.PathLike[str],
+    vertices: Any,
+    triangles: Any,
+    colors: Any = None,
+    **options: Any,
+) -> Path:
+    """Write a triangle mesh ((v, 3) vertices, (t, 3) triangles, optional (v, 3) uint8
+    colours) as a binary PLY file, atomically; ``options`` are those of
+    :func:`ontodetect.io._ply.write_mesh_ply` (``dtype``, ``comments``)."""
+    from ._ply import write_mesh_ply  # lazy: start-up
+
+    return write_mesh_ply(Path(path), vertices, triangles, colors, **options)

@@ -32,7 +32,7 @@ from types import MappingProxyType
 from typing import IO, Any
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from .._progress import progress
 from .._rules import ON_NONFINITE, check_param
@@ -41,7 +41,7 @@ from ..errors import CorruptFileError, InvalidParameterError, ReadError, WriteEr
 from ._atomic import atomic_write
 from ._chunks import Copy, Span, read_records
 
-__all__ = ["read_ply", "write_ply"]
+__all__ = ["read_ply", "write_mesh_ply", "write_ply"]
 
 #: Longest header accepted; a file without ``end_header`` this far in is not PLY.
 HEADER_MAX_BYTES = 1 << 20
@@ -1115,5 +1115,96 @@ def write_ply(
             write_ascii_rows(fh, columns, n, label)
         else:
             write_rows(fh, columns, n, label)
+
+    return write_atomically(path, write)
+
+
+def write_mesh_ply(
+    path: Path,
+    vertices: ArrayLike,
+    triangles: ArrayLike,
+    colors: ArrayLike | None = None,
+    *,
+    dtype: Any = "float64",
+    comments: Sequence[str] = (),
+) -> Path:
+    """Write a triangle mesh as a binary little-endian PLY file, atomically.
+
+    Parameters
+    ----------
+    path : Path
+        Target file.
+    vertices : (v, 3) float
+        Stored as ``x y z`` of type ``dtype``.
+    triangles : (t, 3) int
+        Vertex indices, stored as ``property list uchar int vertex_indices``.
+    colors : (v, 3) uint8, optional
+        Vertex colours (``uchar red green blue``).
+    dtype : {"float64", "float32"}
+        Type of the coordinates: float64 keeps millimetres in a frame far from its origin.
+    comments : sequence of str
+        Header comment lines after ``written by ontodetect``.
+
+    Returns
+    -------
+    Path
+        The written file; Open3D, trimesh, MeshLab and CloudCompare read it.
+
+    Raises
+    ------
+    WriteError
+        The folder is missing or not writable, or the arrays do not make a mesh.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile, trimesh
+    >>> f = pathlib.Path(tempfile.mkdtemp()) / "m.ply"
+    >>> _ = write_mesh_ply(f, [[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]])
+    >>> m = trimesh.load(f, process=False)
+    >>> len(m.vertices), m.faces.tolist()
+    (3, [[0, 1, 2]])
+    """
+    path = Path(path)
+    kind = coordinate_dtype(dtype).newbyteorder("<")
+    xyz = np.asarray(vertices, dtype=np.float64)
+    tri = np.asarray(triangles)
+    if xyz.ndim != 2 or xyz.shape[1] != 3:
+        raise WriteError(path, f"vertices of shape {xyz.shape}, expected (v, 3)")
+    if tri.ndim != 2 or tri.shape[1] != 3 or (tri.size and tri.dtype.kind not in "iu"):
+        raise WriteError(path, f"triangles of shape {tri.shape}, expected (t, 3) integers")
+    if tri.size and (tri.min() < 0 or tri.max() >= len(xyz)):
+        raise WriteError(path, f"triangles name vertices outside 0..{len(xyz) - 1}")
+    if kind.itemsize == 4:
+        check_float32_range(path, "vertices", xyz)
+    columns: list[Column] = [(c, kind, xyz[:, i]) for i, c in enumerate("xyz")]
+    if colors is not None:
+        rgb = np.asarray(colors)
+        if rgb.shape != xyz.shape:
+            raise WriteError(path, f"colours of shape {rgb.shape}, expected {xyz.shape}")
+        rgb = rgb.astype(np.uint8)
+        columns += [(c, np.dtype("u1"), rgb[:, i]) for i, c in enumerate(("red", "green", "blue"))]
+    for text in comments:
+        if not isinstance(text, str) or any(c in text for c in "\r\n") or not text.isascii():
+            raise WriteError(path, f"header comment {text!r}: expected one line of ASCII text")
+    lines = [
+        "ply",
+        "format binary_little_endian 1.0",
+        "comment written by ontodetect",
+        *(f"comment {text}" for text in comments),
+        f"element vertex {len(xyz)}",
+        *(f"property {_PLY_NAMES[k.str[1:]]} {name}" for name, k, _ in columns),
+        f"element face {len(tri)}",
+        "property list uchar int vertex_indices",
+        "end_header\n",
+    ]
+    header = "\n".join(lines).encode("ascii")
+    faces = np.empty(len(tri), dtype=np.dtype([("n", "u1"), ("v", "<i4", (3,))]))
+    faces["n"] = 3
+    faces["v"] = tri
+
+    def write(fh: IO[bytes]) -> None:
+        fh.write(header)
+        write_rows(fh, columns, len(xyz), f"Writing {path.name}")
+        fh.write(faces.view(np.uint8).data)
 
     return write_atomically(path, write)

@@ -14,6 +14,10 @@
 6. floor, walls and ceiling (:func:`find_structure`), kept apart from objects, and the
    altitude cut-off.
 
+Surface reconstruction (Alg. 1 step 2, :func:`reconstruct_surface`, :func:`scene_surface`)
+makes a triangle mesh of the voxel cloud on request: for ``detect --mesh`` and for
+``cluster.adjacency: mesh``.
+
 Every step is also a public function on arrays. :func:`find_ground` runs steps 1–3
 alone (up to the floor plane, nothing that depends on ``prepare.turn``), so that the
 passes of a vote over one scan share them (``prepare(..., ground=...)``).
@@ -48,12 +52,21 @@ from ._prepare import (
     scale_from_travel,
     surface_spacing,
 )
+from ._reconstruct import (
+    MESH_METHODS,
+    SENSOR_HEIGHT,
+    SurfaceMesh,
+    reconstruct_surface,
+    scene_surface,
+)
 from ._structure import STRUCTURE_LABELS, StructurePlane, find_structure, floor_area
 from ._surface import estimate_normals, graph_normals, smooth_surface
 from ._voxel import VoxelGrid, grouped_covariance, voxelize
 
 __all__ = [
     "AXES",
+    "MESH_METHODS",
+    "SENSOR_HEIGHT",
     "STRUCTURE_LABELS",
     "CellPlanes",
     "FloorFit",
@@ -62,6 +75,7 @@ __all__ = [
     "GroundPlane",
     "PreparedScene",
     "StructurePlane",
+    "SurfaceMesh",
     "VoxelGrid",
     "as_direction",
     "cell_planes",
@@ -84,8 +98,10 @@ __all__ = [
     "manhattan_axes",
     "prepare",
     "radius_outlier_mask",
+    "reconstruct_surface",
     "rotation_between",
     "scale_from_travel",
+    "scene_surface",
     "smooth_depth",
     "smooth_surface",
     "statistical_outlier_mask",

@@ -10,6 +10,7 @@ DBSCAN does.
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -24,6 +25,7 @@ __all__ = [
     "core_neighbors",
     "dbscan",
     "euclidean_clusters",
+    "mesh_graph",
     "radius_graph",
     "region_growing",
     "relabel",
@@ -31,6 +33,14 @@ __all__ = [
 
 #: Fewest neighbours (the voxel included) of a DBSCAN core voxel, whatever ``core_fill``.
 MIN_CORE_NEIGHBORS = 2
+#: Mesh adjacency: a path along the surface may be this much longer than the straight
+#: line between two neighbours (it follows a fold, a rounded edge) and still join them.
+GEODESIC_SLACK = 1.5
+#: Mesh adjacency: a vertex belongs to its nearest point when that is within this many
+#: grid cells of it.
+ATTACH_CELLS = 1.5
+#: Rows of the surface reach computed at a time (bounds the sparse products).
+REACH_BLOCK = 50_000
 
 
 def radius_graph(points: ArrayLike, radius: float) -> sparse.csr_matrix:
@@ -57,6 +67,94 @@ def radius_graph(points: ArrayLike, radius: float) -> sparse.csr_matrix:
     d = np.maximum(d, np.finfo(np.float64).tiny)
     g = sparse.coo_matrix((np.r_[d, d], (np.r_[i, j], np.r_[j, i])), shape=(m, m))
     return g.tocsr()
+
+
+def mesh_graph(
+    points: ArrayLike,
+    mesh: Any,
+    radius: float,
+    *,
+    graph: sparse.csr_matrix | None = None,
+) -> sparse.csr_matrix:
+    """The ``radius`` graph restricted to the pairs of points a surface mesh joins.
+
+    Every vertex of ``mesh`` belongs to its nearest point; two points are adjacent on
+    the mesh when vertices of theirs share a triangle (a point that owns no vertex is
+    adjacent to the owner of its nearest vertex). A pair of the radius graph is kept
+    when the mesh joins its points within ``ceil(GEODESIC_SLACK * radius / mesh.cell)``
+    steps: neighbours along the scanned surface stay neighbours, while two objects
+    apart through the air (a chair and the table it stands at), which the radius graph
+    joins, part. A gap of up to about four cells in one surface looks like a hole
+    between samples and the mesh bridges it (:func:`reconstruct_surface` fills
+    ``TANGENTIAL_CELLS`` past the last points on each side).
+
+    Parameters
+    ----------
+    points : (m, 3) float
+        The points the mesh was built from (voxel centres).
+    mesh : SurfaceMesh
+        From :func:`ontodetect.preprocess.reconstruct_surface`; its ``cell`` sets the
+        step length.
+    radius : float
+        Neighbourhood radius (m).
+    graph : sparse matrix, optional
+        :func:`radius_graph` of the points, if already built.
+
+    Returns
+    -------
+    sparse (m, m) matrix
+        Symmetric, weights are distances: a subgraph of the radius graph.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from ontodetect.preprocess import reconstruct_surface
+    >>> g = np.stack(np.meshgrid(np.arange(20), np.arange(20)), -1).reshape(-1, 2) * 0.02
+    >>> a = np.c_[g, np.zeros(len(g))]
+    >>> pts = np.vstack([a, a + [0.48, 0, 0]])   # two sheets 10 cm apart
+    >>> mesh = reconstruct_surface(pts, viewpoint=(0.4, 0.2, 1.0))
+    >>> euclidean_clusters(pts, 0.12).max(), euclidean_clusters(
+    ...     pts, 0.12, graph=mesh_graph(pts, mesh, 0.12)).max()
+    (np.int64(0), np.int64(1))
+    """
+    pts = as_points(points)
+    m = len(pts)
+    g = radius_graph(pts, radius) if graph is None else sparse.csr_matrix(graph)
+    vertices = np.asarray(mesh.vertices, dtype=np.float64)
+    if m < 2 or len(mesh.triangles) == 0:
+        return sparse.csr_matrix((m, m))
+    cell = float(mesh.cell) if mesh.cell > 0 else float(radius)
+    dist, owner = cKDTree(pts).query(vertices, workers=-1)
+    attached = dist <= ATTACH_CELLS * cell
+    edges = mesh.edges
+    a, b = owner[edges[:, 0]], owner[edges[:, 1]]
+    keep = attached[edges[:, 0]] & attached[edges[:, 1]] & (a != b)
+    a, b = a[keep], b[keep]
+    owns = np.zeros(m, dtype=bool)
+    owns[owner[attached]] = True
+    lonely = np.flatnonzero(~owns)
+    if len(lonely) and attached.any():
+        ids = np.flatnonzero(attached)
+        d, near = cKDTree(vertices[ids]).query(pts[lonely], workers=-1)
+        ok = d <= radius
+        a = np.r_[a, lonely[ok]]
+        b = np.r_[b, owner[ids[near[ok]]]]
+    step = sparse.csr_matrix(
+        (np.ones(2 * len(a)), (np.r_[a, b], np.r_[b, a])), shape=(m, m)
+    ) + sparse.identity(m, format="csr")
+    step.data[:] = 1.0
+    hops = max(1, math.ceil(GEODESIC_SLACK * radius / cell))
+    blocks = []
+    for s in range(0, m, REACH_BLOCK):
+        reach = step[s : s + REACH_BLOCK]
+        for _ in range(hops - 1):
+            reach = reach @ step
+            reach.data[:] = 1.0
+        blocks.append(g[s : s + REACH_BLOCK].multiply(reach).tocsr())
+    out = sparse.vstack(blocks, format="csr")
+    out.eliminate_zeros()
+    out.sort_indices()
+    return out
 
 
 def relabel(labels: ArrayLike) -> NDArray[np.int64]:

@@ -18,8 +18,15 @@ from ..cloud import PointCloud, point_cloud
 from ..config import Config
 from ..errors import InvalidParameterError
 from ..ontology import Ontology, builtin_ontology
-from ..preprocess import Ground, PreparedScene, graph_normals, prepare
-from ._cluster import core_neighbors, dbscan, euclidean_clusters, radius_graph, region_growing
+from ..preprocess import Ground, PreparedScene, graph_normals, prepare, scene_surface
+from ._cluster import (
+    core_neighbors,
+    dbscan,
+    euclidean_clusters,
+    mesh_graph,
+    radius_graph,
+    region_growing,
+)
 from ._parts import PartSeed, horizontal_parts, seeded_clusters
 from .planes import extract_planes, plane_relations
 
@@ -416,6 +423,9 @@ def cluster(
 
     with progress("Clustering", total=None):
         graph = radius_graph(centers, radius) if len(centers) > 1 else None
+        if graph is not None and cc.adjacency == "mesh":
+            # Neighbours along the scanned surface only (Alg. 1 step 2 meshes the scan).
+            graph = mesh_graph(centers, scene_surface(prepared, obj), radius, graph=graph)
         seeds: list[PartSeed] = []
         seed_of = np.zeros(0, dtype=np.int64)
         if len(centers) < 2:
