@@ -1029,6 +1029,20 @@ def write_atomically(path: Path, write: Callable[[IO[bytes]], None]) -> Path:
     return path
 
 
+def _header_start(path: Path, fmt: str, comments: Sequence[str]) -> list[str]:
+    """The first lines of a PLY header written by ontodetect: magic, format, comments
+    (each checked to be one line of ASCII text)."""
+    for text in comments:
+        if not isinstance(text, str) or any(c in text for c in "\r\n") or not text.isascii():
+            raise WriteError(path, f"header comment {text!r}: expected one line of ASCII text")
+    return [
+        "ply",
+        f"format {fmt} 1.0",
+        "comment written by ontodetect",
+        *(f"comment {text}" for text in comments),
+    ]
+
+
 def write_ply(
     path: Path,
     cloud: PointCloud,
@@ -1094,14 +1108,8 @@ def write_ply(
         path, cloud.fields, allow_64bit=False, taken=[name for name, _, _ in columns]
     )
     n = len(cloud)
-    for text in comments:
-        if not isinstance(text, str) or any(c in text for c in "\r\n") or not text.isascii():
-            raise WriteError(path, f"header comment {text!r}: expected one line of ASCII text")
     lines = [
-        "ply",
-        f"format {'ascii' if ascii else 'binary_little_endian'} 1.0",
-        "comment written by ontodetect",
-        *(f"comment {text}" for text in comments),
+        *_header_start(path, "ascii" if ascii else "binary_little_endian", comments),
         f"element vertex {n}",
     ]
     lines += [f"property {_PLY_NAMES[kind.str[1:]]} {name}" for name, kind, _ in columns]
@@ -1183,14 +1191,8 @@ def write_mesh_ply(
             raise WriteError(path, f"colours of shape {rgb.shape}, expected {xyz.shape}")
         rgb = rgb.astype(np.uint8)
         columns += [(c, np.dtype("u1"), rgb[:, i]) for i, c in enumerate(("red", "green", "blue"))]
-    for text in comments:
-        if not isinstance(text, str) or any(c in text for c in "\r\n") or not text.isascii():
-            raise WriteError(path, f"header comment {text!r}: expected one line of ASCII text")
     lines = [
-        "ply",
-        "format binary_little_endian 1.0",
-        "comment written by ontodetect",
-        *(f"comment {text}" for text in comments),
+        *_header_start(path, "binary_little_endian", comments),
         f"element vertex {len(xyz)}",
         *(f"property {_PLY_NAMES[k.str[1:]]} {name}" for name, k, _ in columns),
         f"element face {len(tri)}",
