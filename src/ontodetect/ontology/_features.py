@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ._gaussian import Gaussian
 
@@ -171,18 +172,28 @@ def _gap(desc: Any, i: int, j: int) -> float:
 _FACING = 0.3
 
 
+def _facing(plane: Any) -> tuple[NDArray[np.float64], float] | None:
+    """The horizontal part of a plane's normal and its length, when the plane faces
+    sideways (the length at least ``_FACING``); ``None`` for a level one."""
+    normal = np.asarray(plane.normal, dtype=float)[:2]
+    size = float(np.hypot(*normal))
+    return (normal, size) if size >= _FACING else None
+
+
+def _step(a: Any, b: Any) -> NDArray[np.float64]:
+    """From a's centroid to b's, horizontally."""
+    return np.asarray(b.centroid, dtype=float)[:2] - np.asarray(a.centroid, dtype=float)[:2]
+
+
 def _behind(desc: Any, i: int, j: int) -> float:
     """How far (m) b's centroid lies behind plane a, horizontally along a's outward normal
     (a backrest's normal points away from its seat): negative in front of it."""
-    normal = np.asarray(desc.planes[i].normal, dtype=float)[:2]
-    size = float(np.hypot(*normal))
-    if size < _FACING:
+    a, b = desc.planes[i], desc.planes[j]
+    facing = _facing(a)
+    if facing is None:
         return 0.0
-    step = (
-        np.asarray(desc.planes[j].centroid, dtype=float)[:2]
-        - np.asarray(desc.planes[i].centroid, dtype=float)[:2]
-    )
-    return float(normal @ step) / size
+    normal, size = facing
+    return float(normal @ _step(a, b)) / size
 
 
 def _aside(desc: Any, i: int, j: int) -> float:
@@ -190,15 +201,12 @@ def _aside(desc: Any, i: int, j: int) -> float:
     (a's if it faces sideways, else b's), horizontally and across its normal: 0 when b
     stands centred before or behind a, as a backrest on its seat's middle line."""
     a, b = desc.planes[i], desc.planes[j]
-    normal = np.asarray(a.normal, dtype=float)[:2]
-    if float(np.hypot(*normal)) < _FACING:
-        normal = np.asarray(b.normal, dtype=float)[:2]
-    size = float(np.hypot(*normal))
-    if size < _FACING:
+    facing = _facing(a) or _facing(b)
+    if facing is None:
         return 0.0
+    normal, size = facing
     along = np.array([-normal[1], normal[0]]) / size
-    step = np.asarray(b.centroid, dtype=float)[:2] - np.asarray(a.centroid, dtype=float)[:2]
-    return abs(float(along @ step))
+    return abs(float(along @ _step(a, b)))
 
 
 #: A level plane has a long axis when it is at least this many times longer than wide
