@@ -5,7 +5,7 @@ import sys
 
 import pytest
 
-HEAVY = ("open3d", "matplotlib", "trimesh", "sklearn")
+HEAVY = ("open3d", "matplotlib", "trimesh", "sklearn", "skimage")
 
 
 @pytest.mark.parametrize(
@@ -16,6 +16,7 @@ HEAVY = ("open3d", "matplotlib", "trimesh", "sklearn")
         "ontodetect.labeling",
         "ontodetect.cad",
         "ontodetect.geometry._mesh",
+        "ontodetect.preprocess",
     ],
 )
 def test_importing_a_stage_leaves_heavy_libraries_unloaded(module):

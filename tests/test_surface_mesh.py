@@ -7,14 +7,14 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from ontodetect.cli import main
 from ontodetect.config import Config
 from ontodetect.errors import InvalidParameterError, WriteError
 from ontodetect.io import write_mesh
-from ontodetect.preprocess import SurfaceMesh, reconstruct_surface
-from ontodetect.preprocess._reconstruct import _triangle_table
+from ontodetect.preprocess import SurfaceMesh, _reconstruct, reconstruct_surface
 from ontodetect.segment import euclidean_clusters, mesh_graph, radius_graph
 from ontodetect.synth import synthesize, write_synth
 
@@ -53,18 +53,53 @@ def edge_uses(mesh):
     return counts
 
 
-# -- the lookup table -------------------------------------------------------------------------
-def test_table_has_the_marching_cubes_counts():
-    table, count = _triangle_table()
-    assert count[0] == count[255] == 0
-    assert count.max() == 5  # the most triangles a marching-cubes case has
-    assert (count[1:255] >= 1).all()
-    # one corner in (or out): one triangle; two corners along an edge: a quad
-    for c in range(8):
-        assert count[1 << c] == count[255 - (1 << c)] == 1
-    assert count[0b11] == 2
-    one = table[1, :3]
-    assert sorted(one.tolist()) == [0, 4, 8]  # corner 0 cut off: its three edges
+# -- blocks -----------------------------------------------------------------------------------
+def test_blocks_meet_without_seams(rng, monkeypatch):
+    """A sphere across many blocks: one closed surface, each vertex once, whatever the block."""
+    pts, normals = sphere(20_000, 0.3, rng)
+    large = reconstruct_surface(pts, normals, cell=CELL)
+    monkeypatch.setattr(_reconstruct, "MC_BLOCK", 4)  # ~8 blocks across the sphere
+    small = reconstruct_surface(pts, normals, cell=CELL)
+    for mesh in (large, small):
+        assert len(np.unique(mesh.vertices, axis=0)) == len(mesh.vertices)
+        assert (edge_uses(mesh) == 2).all()
+        # a sphere: V - E + F = 2, and one connected surface
+        assert len(mesh.vertices) - len(mesh.edges) + len(mesh.triangles) == 2
+        e = mesh.edges
+        adj = coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(len(mesh.vertices),) * 2)
+        assert connected_components(adj, directed=False)[0] == 1
+    # the same surface: same vertices (the grid edges' crossings), same triangles
+    assert len(small.vertices) == len(large.vertices)
+    assert len(small.triangles) == len(large.triangles)
+    a, b = large.vertices, small.vertices
+    np.testing.assert_allclose(a[np.lexsort(a.T)], b[np.lexsort(b.T)], atol=1e-9)
+    assert small.area == pytest.approx(large.area, rel=1e-9)
+
+
+@pytest.mark.parametrize("block", [4, 32])
+def test_a_surface_through_grid_nodes_is_closed(monkeypatch, block):
+    """Signed distances of exactly 0 at many nodes, on block faces too: no vertex on a
+    node is lost or doubled (0 counts as outside, as a distance just above it)."""
+    monkeypatch.setattr(_reconstruct, "MC_BLOCK", block)
+    ijk = np.stack(np.meshgrid(*[np.arange(1, 18)] * 3, indexing="ij"), -1).reshape(-1, 3)
+    # an octahedron |i - 9| + |j - 9| + |k - 9| = 5, in whole cells
+    values = np.abs(ijk - 9).sum(axis=1) - 5.0
+    keys = _reconstruct._pack(ijk)
+    order = np.argsort(keys)
+    vertices, triangles = _reconstruct._marching_cubes(
+        keys[order], values[order] * CELL, np.zeros(3), CELL
+    )
+    mesh = SurfaceMesh(vertices, triangles)
+    assert np.isfinite(vertices).all() and (values == 0).sum() > 100
+    assert len(np.unique(vertices, axis=0)) == len(vertices)
+    assert (edge_uses(mesh) == 2).all()
+    assert len(vertices) - len(mesh.edges) + len(triangles) == 2
+    # on the octahedron, moved by at most about MIN_DISTANCE of a cell
+    d = np.abs(vertices / CELL - 9).sum(axis=1) - 5.0
+    assert np.abs(d).max() < 2 * _reconstruct.MIN_DISTANCE
+    v = vertices[triangles]
+    n = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
+    assert (np.einsum("ij,ij->i", n, v.mean(axis=1) - 9 * CELL) > 0).all()  # outwards
 
 
 # -- known surfaces ---------------------------------------------------------------------------

@@ -2,21 +2,21 @@
 voxel cloud, by marching cubes on a truncated signed-distance grid, or by Open3D's
 screened Poisson reconstruction.
 
-The thesis meshed its scans with LVR's marching cubes; this is the same method in plain
-NumPy. The signed distance of a grid node is the distance to the tangent planes of the
-nearest voxel centres (Hoppe et al. 1992), their normals turned towards a viewpoint; it is
-defined only close to the points (a sparse grid: nodes within a few cells of a point, kept
-as sorted integer keys), so that memory follows the scanned surface, not the scan's
-bounding box. Marching cubes runs on that sparse grid with a lookup table built once from
-the cube's faces (ambiguous faces are resolved the same way from either side, so the mesh
-has no cracks).
+The thesis meshed its scans with LVR's marching cubes; this is the same method. The signed
+distance of a grid node is the distance to the tangent planes of the nearest voxel centres
+(Hoppe et al. 1992), their normals turned towards a viewpoint; it is defined only close to
+the points (a sparse grid: nodes within a few cells of a point, kept as sorted integer
+keys), so that memory follows the scanned surface, not the scan's bounding box. The
+marching cubes are scikit-image's (Lewiner et al. 2003: ambiguous faces and cubes resolved
+from the distances, with no cracks), run block by block over the occupied part of the grid
+and welded where the blocks meet.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from functools import lru_cache
+from itertools import pairwise
 from typing import Any
 
 import numpy as np
@@ -58,6 +58,12 @@ NODE_BLOCK = 100_000
 QUERY_BLOCK = 200_000
 #: The grid's first node lies this many cells below the lowest point.
 GRID_MARGIN = 2.5
+#: Marching cubes runs on dense blocks of this many cells a side (one 65³ float32 array
+#: at a time: memory follows the surface, not the scan's bounding box).
+MC_BLOCK = 64
+#: Signed distances (in cells) nearer zero than this are moved out to it, their sign kept:
+#: no vertex falls on a grid node (within float32 precision of the block coordinates).
+MIN_DISTANCE = 1e-4
 #: Bits per axis of a packed grid key (a cube of 2^21 cells a side: 20 km at 1 cm).
 _KEY_BITS = 21
 #: Poisson: octree depth cap (a 2^10 grid a side), and the share of vertices with the
@@ -118,99 +124,11 @@ class SurfaceMesh:
         return SurfaceMesh(vertices, triangles, self.colors, self.cell, dict(self.info))
 
 
-# -- marching cubes lookup table ------------------------------------------------------------
-# Corner c of a cube is (c & 1, c >> 1 & 1, c >> 2 & 1); edge e joins two corners that differ
-# in one bit, and is named by its lower corner and its axis.
-_EDGES = [(c, c | (1 << a), a) for a in range(3) for c in range(8) if not c & (1 << a)]
-_CORNER_OFFSETS = np.array([[c & 1, c >> 1 & 1, c >> 2 & 1] for c in range(8)], dtype=np.int64)
-
-
-def _face_cycles() -> list[list[int]]:
-    """The four corners of each of the six faces, in order around the face."""
-    faces = []
-    for a in range(3):
-        b, c = [x for x in range(3) if x != a]
-        for side in (0, 1):
-            base = side << a
-            faces.append([base, base | 1 << b, base | 1 << b | 1 << c, base | 1 << c])
-    return faces
-
-
-@lru_cache(maxsize=1)
-def _triangle_table() -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-    """(256, 15) local edges of the triangles of each inside/outside case (-1 padded) and
-    (256,) their number.
-
-    The polygons of a case are found face by face: a face crossed on two edges holds one
-    segment between them; a face crossed on all four (diagonal corners inside) holds two,
-    cutting off its inside corners. Both cubes sharing a face decide alike, so the mesh has
-    no cracks. Segments chain into closed loops; each loop becomes a fan of triangles wound
-    so that its normal points from the inside corners to the outside ones.
-    """
-    edge_id = {(lo, hi): i for i, (lo, hi, _) in enumerate(_EDGES)}
-
-    def eid(c0: int, c1: int) -> int:
-        return edge_id[(min(c0, c1), max(c0, c1))]
-
-    faces = _face_cycles()
-    mid = np.array([(_CORNER_OFFSETS[lo] + _CORNER_OFFSETS[hi]) / 2 for lo, hi, _ in _EDGES])
-    table = np.full((256, 15), -1, dtype=np.int64)
-    count = np.zeros(256, dtype=np.int64)
-    for case in range(1, 255):
-        inside = [bool(case >> c & 1) for c in range(8)]
-        links: dict[int, list[int]] = {}
-        for cyc in faces:
-            crossed = [
-                (k, eid(cyc[k], cyc[(k + 1) % 4]))
-                for k in range(4)
-                if inside[cyc[k]] != inside[cyc[(k + 1) % 4]]
-            ]
-            if len(crossed) == 2:
-                pairs = [(crossed[0][1], crossed[1][1])]
-            elif len(crossed) == 4:
-                # Diagonal corners inside: cut each inside corner off (the edges on both
-                # sides of it pair up).
-                pairs = []
-                for k in range(4):
-                    if inside[cyc[k]]:
-                        pairs.append((eid(cyc[k - 1], cyc[k]), eid(cyc[k], cyc[(k + 1) % 4])))
-            else:
-                pairs = []
-            for p, q in pairs:
-                links.setdefault(p, []).append(q)
-                links.setdefault(q, []).append(p)
-        tris: list[int] = []
-        left = sorted(links)
-        while left:
-            loop = [left[0]]
-            prev, cur = None, left[0]
-            while True:
-                a, b = links[cur]
-                nxt = b if a == prev else a
-                if nxt == loop[0]:
-                    break
-                loop.append(nxt)
-                prev, cur = cur, nxt
-            left = [e for e in left if e not in loop]
-            # Outward: from the inside end of each crossed edge to its outside end.
-            out = np.zeros(3)
-            for e in loop:
-                lo, _, axis = _EDGES[e]
-                out[axis] += 1.0 if inside[lo] else -1.0
-            pts = mid[loop]
-            normal = np.cross(pts[1] - pts[0], pts[2] - pts[0])
-            for k in range(2, len(loop) - 1):
-                normal += np.cross(pts[k] - pts[0], pts[k + 1] - pts[0])
-            if normal @ out < 0:
-                loop = loop[::-1]
-            for k in range(1, len(loop) - 1):
-                tris += [loop[0], loop[k], loop[k + 1]]
-        table[case, : len(tris)] = tris
-        count[case] = len(tris) // 3
-    return table, count
-
-
 # -- the sparse grid ------------------------------------------------------------------------
+#: The eight corners of a cube, corner c at (c & 1, c >> 1 & 1, c >> 2 & 1).
+_CORNERS = np.array([[c & 1, c >> 1 & 1, c >> 2 & 1] for c in range(8)], dtype=np.int64)
+
+
 def _pack(ijk: NDArray[np.int64]) -> NDArray[np.int64]:
     return (ijk[:, 0] << (2 * _KEY_BITS)) | (ijk[:, 1] << _KEY_BITS) | ijk[:, 2]
 
@@ -269,42 +187,141 @@ def _signed_distance(
 def _marching_cubes(
     keys: NDArray[np.int64], values: NDArray[np.float64], origin: NDArray[np.float64], cell: float
 ) -> tuple[NDArray[np.float64], NDArray[np.int32]]:
-    """Marching cubes on the sparse grid of sorted ``keys`` with ``values`` (NaN: unknown);
-    a cube is meshed only when its eight corners are known."""
-    table, count = _triangle_table()
+    """Marching cubes (scikit-image's, Lewiner et al. 2003) on the sparse grid of sorted
+    ``keys`` with ``values`` (NaN: unknown); a cube is meshed only when its eight corners
+    are known.
+
+    The grid is cut into dense blocks of ``MC_BLOCK`` cells a side whose nodes overlap by
+    one layer, so that each cube lies in one block and the blocks' meshes meet on the faces
+    they share. scikit-image gives a block's vertices in float32 block coordinates: they
+    only name the grid edge each vertex lies on (or, for the few vertices some cases add
+    inside a cube, that cube). The vertices of every block are then merged by that edge
+    and placed in float64 from the signed distances at its two ends, so a vertex on a face
+    two blocks share comes out once, at the same place, whichever block found it.
+    """
+    from skimage.measure import marching_cubes  # heavy: imported when used (start-up)
+
     known = ~np.isnan(values)
     keys, values = keys[known], values[known]
     if len(keys) == 0:
         return np.zeros((0, 3)), np.zeros((0, 3), np.int32)
-    corner_keys = _pack(_CORNER_OFFSETS)
-    case = np.zeros(len(keys), dtype=np.int64)
-    complete = np.ones(len(keys), dtype=bool)
-    for c in range(8):
-        ck = keys + corner_keys[c]
-        at = np.minimum(np.searchsorted(keys, ck), len(keys) - 1)
-        hit = keys[at] == ck
-        complete &= hit
-        case |= (np.where(hit, values[at], 0.0) < 0).astype(np.int64) << c
-    cubes = np.flatnonzero(complete & (count[case] > 0))
-    ntri = count[case[cubes]]
-    cube_of = np.repeat(cubes, ntri * 3)
-    slot = np.arange(int(ntri.sum()) * 3) - np.repeat(np.cumsum(ntri * 3) - ntri * 3, ntri * 3)
-    local = table[case[cube_of], slot]
-    edges = np.array(_EDGES, dtype=np.int64)
-    # A global edge: the key of its lower corner and its axis.
-    lower = keys[cube_of] + corner_keys[edges[local, 0]]
-    gkey = lower * 3 + edges[local, 2]
-    uniq, inverse = np.unique(gkey, return_inverse=True)
-    lo_key, axis = uniq // 3, uniq % 3
-    hi_key = lo_key + np.array([1 << (2 * _KEY_BITS), 1 << _KEY_BITS, 1])[axis]
-    v0 = values[np.searchsorted(keys, lo_key)]
-    v1 = values[np.searchsorted(keys, hi_key)]
-    t = v0 / (v0 - v1)
-    pos = _unpack(lo_key).astype(np.float64)
-    pos[np.arange(len(pos)), axis] += t
-    vertices = origin + pos * cell
-    triangles = inverse.reshape(-1, 3).astype(np.int32)
-    return vertices, triangles
+    # In cells, and kept off zero (sign kept, 0 counted outside): no vertex falls on a grid
+    # node, so each lies strictly inside its edge even in float32, and its edge is known.
+    dist = values / cell
+    near = np.flatnonzero(np.abs(dist) < MIN_DISTANCE)
+    dist[near] = np.where(dist[near] < 0, -MIN_DISTANCE, MIN_DISTANCE)
+    dist32 = dist.astype(np.float32)
+    del values
+    size = MC_BLOCK
+    node_block, node_local, node_index = _blocks(keys, size)
+    starts = np.flatnonzero(np.r_[True, node_block[1:] != node_block[:-1], True])
+
+    lower: list[NDArray[np.int64]] = []  # per vertex: key of its edge's lower node
+    kind: list[NDArray[np.int64]] = []  # per vertex: its edge's axis, or 3
+    centre_at: list[NDArray[np.float64]] = []  # per vertex: grid coordinates (inside a cube)
+    faces: list[NDArray[np.int64]] = []
+    count = 0
+    for s, e in pairwise(starts):
+        loc = node_local[s:e]
+        lo = loc.min(axis=0)
+        shape = loc.max(axis=0) - lo + 1
+        if (shape < 2).any():
+            continue
+        idx = tuple((loc - lo).T)
+        grid = np.zeros(shape, np.float32)
+        grid[idx] = dist32[node_index[s:e]]
+        have = np.zeros(shape, bool)
+        have[idx] = True
+        out = grid > 0
+        # Cubes (by lower corner) whose eight corners are known and not all on one side.
+        cubes = _all_corners(have) & ~_all_corners(out) & ~_all_corners(~out)
+        if not cubes.any():
+            continue
+        mask = np.zeros(shape, bool)
+        mask[1:, 1:, 1:] = cubes  # scikit-image masks a cube by its upper corner
+        verts, tris, _, _ = marching_cubes(grid, 0.0, mask=mask)
+        base = _unpack(node_block[s : s + 1])[0] * size + lo
+        node = np.floor(verts)
+        off = verts != node
+        on_edge = off.sum(axis=1) == 1
+        lower.append(_pack(node.astype(np.int64) + base))
+        kind.append(np.where(on_edge, np.argmax(off, axis=1), 3))  # 3: inside a cube
+        centre_at.append(np.where(on_edge[:, None], 0.0, base + verts.astype(np.float64)))
+        faces.append(tris.astype(np.int64) + count)
+        count += len(verts)
+    del node_block, node_local, node_index, dist32
+    if not faces:
+        return np.zeros((0, 3)), np.zeros((0, 3), np.int32)
+    # Weld: one vertex per grid edge, named by the rank of its lower node and its axis; a
+    # cube's centre vertex is its block's own (named after all edges, in block order).
+    lower_key, axis = np.concatenate(lower), np.concatenate(kind)
+    del lower, kind
+    edge = axis < 3
+    name = np.arange(len(axis)) + 3 * len(keys)
+    name[edge] = _find(keys, lower_key[edge]) * 3 + axis[edge]
+    uniq, first, inverse = np.unique(name, return_index=True, return_inverse=True)
+    triangles = inverse.reshape(-1)[np.concatenate(faces)].astype(np.int32)
+    del faces, inverse, name, lower_key, axis, edge
+    pos = np.concatenate(centre_at)[first]
+    del centre_at, first
+    # On an edge: linear interpolation of the signed distance between its two nodes.
+    on_edge = np.flatnonzero(uniq < 3 * len(keys))
+    r0, a = uniq[on_edge] // 3, uniq[on_edge] % 3
+    r1 = _find(keys, keys[r0] + np.array([1 << (2 * _KEY_BITS), 1 << _KEY_BITS, 1])[a])
+    v0, v1 = dist[r0], dist[r1]
+    edge_pos = _unpack(keys[r0]).astype(np.float64)
+    edge_pos[np.arange(len(a)), a] += v0 / (v0 - v1)
+    pos[on_edge] = edge_pos
+    return origin + pos * cell, triangles
+
+
+def _blocks(
+    keys: NDArray[np.int64], size: int
+) -> tuple[NDArray[np.int64], NDArray[np.int16], NDArray[np.int64]]:
+    """The nodes of each block of ``size`` cells a side, blocks in key order: the block's
+    packed key, the node's place in it (0 to ``size``) and the node's index in ``keys``.
+
+    A node on the lower face of its block is also on the upper face of the block below
+    (or of the blocks below, at an edge or a corner of its block): it comes once for each.
+    """
+    node_block = np.zeros(len(keys), np.int64)
+    local = np.empty((len(keys), 3), np.int16)
+    for a, shift in enumerate((2 * _KEY_BITS, _KEY_BITS, 0)):
+        coord = (keys >> shift) & ((1 << _KEY_BITS) - 1)
+        b = coord // size
+        local[:, a] = coord - b * size
+        node_block |= b << shift
+    del coord, b
+    on_face = (local[:, 0] == 0) + 2 * (local[:, 1] == 0) + 4 * (local[:, 2] == 0)
+    shared = np.flatnonzero(on_face)
+    shared_block = _unpack(node_block[shared])
+    parts = [(node_block, local, np.arange(len(keys)))]
+    for c in range(1, 8):
+        below = ((on_face[shared] & c) == c) & (shared_block >= _CORNERS[c]).all(axis=1)
+        at = shared[below]
+        corner = _CORNERS[c]
+        parts.append((node_block[at] - _pack(corner[None])[0], local[at] + size * corner, at))
+    del on_face, shared, shared_block, node_block, local
+    node_block, node_local, node_index = (np.concatenate(p) for p in zip(*parts))
+    del parts
+    order = np.argsort(node_block, kind="stable")
+    return node_block[order], node_local[order], node_index[order]
+
+
+def _all_corners(a: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    """Of each cube of a dense grid (by its lower corner): whether ``a`` holds at all eight
+    of its corners."""
+    a = a[:-1] & a[1:]
+    a = a[:, :-1] & a[:, 1:]
+    return a[:, :, :-1] & a[:, :, 1:]
+
+
+def _find(keys: NDArray[np.int64], wanted: NDArray[np.int64]) -> NDArray[np.int64]:
+    """Where each of ``wanted`` is in the sorted ``keys``, all of which it must be among."""
+    at = np.minimum(np.searchsorted(keys, wanted), len(keys) - 1)
+    if not (keys[at] == wanted).all():
+        raise RuntimeError("marching cubes met a cube with a corner of unknown distance")
+    return at
 
 
 def _vertex_colors(
