@@ -324,6 +324,45 @@ def test_walls_do_not_depend_on_where_the_scan_sits(rng):
     assert offsets == pytest.approx(moved, abs=1e-3)
 
 
+@pytest.mark.xfail(
+    strict=True,
+    reason="walls found move with a 0.7 degree turn (docs/benchmarks.md, 'Walls under a "
+    "small turn'): the histogram's bins, not the wall, choose the cells",
+)
+@pytest.mark.parametrize("seed", range(2))
+def test_a_small_turn_finds_the_same_walls(seed):
+    # A room scanned to 1.5 m whose walls are a little out of true and not quite flat, one
+    # of them showing only between two tall cupboards. The vote's passes turn the scan by
+    # 0.7 degrees: the walls found, and the points taken as wall, should not change with it.
+    rng = np.random.default_rng(seed)
+    w, d, top = 6.0, 5.0, 1.5
+    walls = [
+        rect(rng, (0, 0, 0), (w, 0, 0), (0, 0, top), 0.03),
+        rect(rng, (0, d, 0), (w, 0, 0), (0, 0, top), 0.03),
+        rect(rng, (0, 0, 0), (0, d, 0), (0, 0, top), 0.03),
+        rect(rng, (w, 1.8, 0), (0, 1.4, 0), (0, 0, top), 0.03),
+    ]
+    floor = rect(rng, (0, 0, 0), (w, 0, 0), (0, d, 0), 0.03)
+    stuff = [
+        box(rng, (1.0, 1.0, 0.0), (2.2, 1.8, 0.75), 0.02),
+        box(rng, (0.0, 2.5, 0.0), (0.5, 3.7, 1.2), 0.02),
+        box(rng, (w - 0.6, 0.0, 0.0), (w, 1.8, 2.0), 0.03),
+        box(rng, (w - 0.6, 3.2, 0.0), (w, d, 2.0), 0.03),
+    ]
+    pts = np.vstack([floor, *walls, *stuff])
+    pts += rng.normal(0.0, 0.004, pts.shape)
+    pts[:, :2] += 0.01 * np.sin(3.0 * pts[:, 2:3] + pts[:, :1])
+    found, labels = [], []
+    for turn in (0.0, 0.7, -0.7):
+        scene = prepare(pts, Config().with_overrides([f"prepare.turn={turn}"]))
+        found.append(sum(p.kind == "wall" for p in scene.structure_planes))
+        labels.append(np.append(scene.structure_label, -1)[scene.point_to_voxel] == 2)
+    # The four walls, the cupboards' backs on the fourth; their fronts have a wall behind.
+    assert found == [4, 4, 4]
+    for other in labels[1:]:
+        assert np.mean(labels[0] != other) < 0.005
+
+
 def test_altitude_cutoff_is_configurable(rng):
     pts, _ = room(rng)
     cfg = Config().with_overrides(["prepare.altitude_cutoff=0.5"])
