@@ -57,25 +57,26 @@ def footprint_gap(a: NDArray[np.float64], b: NDArray[np.float64]) -> float:
     """
     a = np.asarray(a, dtype=np.float64)
     b = np.asarray(b, dtype=np.float64)
-    # Separating axes: the edge normals of both; none separates, the footprints overlap.
-    apart = False
+    if not _separated(a, b):
+        return 0.0
+    return min(_to_edges(a, b), _to_edges(b, a))
+
+
+def _separated(a: NDArray[np.float64], b: NDArray[np.float64]) -> bool:
+    """Whether an edge normal of either convex polygon separates the two (separating axes:
+    none does when they overlap or touch)."""
     for poly in (a, b):
         edges = np.roll(poly, -1, axis=0) - poly
-        for nx, ny in np.c_[-edges[:, 1], edges[:, 0]]:
-            pa, pb = a @ (nx, ny), b @ (nx, ny)
-            if pa.max() < pb.min() or pb.max() < pa.min():
-                apart = True
-                break
-        if apart:
-            break
-    if not apart:
-        return 0.0
+        normals = np.c_[-edges[:, 1], edges[:, 0]]
+        pa, pb = a @ normals.T, b @ normals.T
+        if np.any((pa.max(axis=0) < pb.min(axis=0)) | (pb.max(axis=0) < pa.min(axis=0))):
+            return True
+    return False
 
-    def to_edges(points: NDArray[np.float64], poly: NDArray[np.float64]) -> float:
-        start = poly
-        step = np.roll(poly, -1, axis=0) - poly
-        rel = points[:, None, :] - start[None]
-        t = np.clip((rel * step).sum(-1) / np.maximum((step * step).sum(-1), 1e-18), 0.0, 1.0)
-        return float(np.linalg.norm(rel - t[..., None] * step, axis=-1).min())
 
-    return min(to_edges(a, b), to_edges(b, a))
+def _to_edges(points: NDArray[np.float64], poly: NDArray[np.float64]) -> float:
+    """Shortest distance from any of ``points`` to the outline of ``poly``."""
+    step = np.roll(poly, -1, axis=0) - poly
+    rel = points[:, None, :] - poly[None]
+    t = np.clip((rel * step).sum(-1) / np.maximum((step * step).sum(-1), 1e-18), 0.0, 1.0)
+    return float(np.linalg.norm(rel - t[..., None] * step, axis=-1).min())
