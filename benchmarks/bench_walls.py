@@ -1,13 +1,13 @@
 """How far the walls preparation finds move when the scan is turned by the vote's 0.7 degrees.
 
 The vote (``detect.votes``) segments the scan three times, turned by 0 and by plus and
-minus ``detect.vote_turn`` degrees about the vertical. A wall does not depend on the
-turn, so neither should the points taken as wall: what one pass takes and another does
-not joins, or leaves, the furniture beside it. For every scan this prepares the scan
-(:func:`ontodetect.preprocess.prepare`) at the three turns and reports, for each turned
-pass, the share of the points taken as wall by one of the two passes and not by the
-other (points compared through ``point_to_voxel``; 0: the same wall points), then the
-mean over the scans and how many exceed 0.1.
+minus ``detect.vote_turn`` degrees about the vertical (``pipeline.vote_turns``). A wall
+does not depend on the turn, so neither should the points taken as wall: what one pass
+takes and another does not joins, or leaves, the furniture beside it. For every scan this
+prepares the scan (:func:`ontodetect.preprocess.prepare`) at the vote's turns and reports,
+for each turned pass, the share of the points taken as wall by one of the two passes and
+not by the other (points compared through ``point_to_voxel``; 0: the same wall points),
+then the mean over the scans and how many exceed 0.1.
 
 Scans: ScanNet scenes in VoteNet's layout (``--real DIR``: ``*_vert.npy``) and the
 generalization benchmark's simulated rooms (``--sim DIR``: one folder per scan with
@@ -58,6 +58,7 @@ def scans(real: Path | None, sim: Path | None, every: int) -> list[tuple[str, Pa
 def main(argv: list[str]) -> int:
     from ontodetect import read_cloud
     from ontodetect.config import Config
+    from ontodetect.pipeline import vote_turns
 
     ap = argparse.ArgumentParser(prog="python -m benchmarks walls", description=__doc__)
     ap.add_argument("--real", type=Path, help="ScanNet scenes (*_vert.npy)")
@@ -70,6 +71,7 @@ def main(argv: list[str]) -> int:
         ap.error("give --real DIR, --sim DIR or both")
     base = Config().with_overrides(args.set)
     turn = base.detect.vote_turn
+    turns = [0.0, *vote_turns(max(2, base.detect.votes), turn)]
     rows = []
     for name, path in scans(args.real, args.sim, max(1, args.every)):
         cloud = read_cloud(path)
@@ -77,7 +79,7 @@ def main(argv: list[str]) -> int:
             warnings.simplefilter("ignore")  # a scan without a floor says so; not counted here
             masks = [
                 wall_points(cloud, base.replace(prepare={"turn": base.prepare.turn + t}))
-                for t in (0.0, turn, -turn)
+                for t in turns
             ]
         moved = [disagreement(masks[0], m) for m in masks[1:]]
         rows.append({"scan": name, "wall_points": int(masks[0].sum()), "moved": moved})
