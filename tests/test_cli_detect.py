@@ -73,6 +73,9 @@ def test_detect_explain_prints_constraints(scene, tmp_path, capsys):
     assert code == 0
     text = capsys.readouterr().out
     assert "P_obj|ont" in text and "cost U" in text and "seat" in text
+    # The vote: what each pass made of a detection's points.
+    assert "first pass: chair" in text and "pass turned +0.7°: " in text
+    assert "pass turned -0.7°: " in text and "point IoU" in text
     assert not (tmp_path / "detections.png").exists()
 
 

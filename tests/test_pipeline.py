@@ -222,6 +222,35 @@ def test_pass_probabilities_average_the_covering_clusters():
     assert pass_probabilities([], [], others) == []
 
 
+def test_pass_ballots_say_what_every_pass_made_of_a_cluster():
+    from ontodetect.pipeline import VOTE_IOU, pass_ballots
+
+    chair, lone = np.arange(100), np.arange(500, 520)
+    first = [(chair, {"chair": 0.8, "none": 0.2}, "chair"), (lone, {"none": 1.0}, None)]
+    others = [
+        # The chair whole (IoU 0.9) and a bit of it (IoU 0.1): the larger share speaks.
+        [(np.arange(10, 100), {"chair": 0.7, "none": 0.3}, "chair"), (np.arange(10), {}, None)],
+        # The chair merged with a table (IoU 100 / 300): a table, too little to count.
+        [(np.arange(300), {"table": 0.6, "chair": 0.1, "none": 0.3}, "table")],
+    ]
+    got = pass_ballots({0: chair, 1: lone}, first, others, [0.7, -0.7])
+    a = got[0]
+    assert [b.turn for b in a] == [0.0, 0.7, -0.7]
+    assert [b.label for b in a] == ["chair", "chair", "table"]
+    assert [b.best for b in a] == ["chair", "chair", "table"]
+    assert a[1].iou == pytest.approx(0.9) and a[1].probability == pytest.approx(0.7)
+    assert a[2].iou == pytest.approx(1 / 3) and a[2].iou < VOTE_IOU and a[2].num_points == 300
+    assert [b.counts for b in a] == [True, True, False]
+    # No cluster of a pass shares a point with the lone cluster: an empty ballot.
+    assert [(b.label, b.iou, b.num_points, b.best) for b in got[1][1:]] == [
+        (None, 0.0, 0, None)
+    ] * 2
+    assert a[2].to_dict()["counts"] is False and a[2].to_dict()["class"] == "table"
+    assert pass_ballots({}, first, others, [0.7, -0.7]) == {}
+    with pytest.raises(InvalidParameterError, match="turns"):
+        pass_ballots({0: chair}, first, others, [0.7])
+
+
 def test_class_for_label_takes_the_cheapest_reported_class():
     """A detection the first pass left out is reported as the class of its label that the
     energy ranks first, not the first such class in the file."""
@@ -276,6 +305,12 @@ def test_votes_keep_detections_in_the_input_frame(dining):
         assert np.all(d.center[:2] > pts[:, :2].min(axis=0))
         assert np.all(d.center[:2] < pts[:, :2].max(axis=0))
     assert all(d.votes is None for d in one.detections)
+    # What every pass made of each detection's points: the passes counted are its votes.
+    for d in three.detections:
+        ballots = three.ballots[d.cluster]
+        assert [b.turn for b in ballots] == [0.0, 0.7, -0.7]
+        assert sum(b.counts and b.label == d.label for b in ballots) == d.votes
+    assert one.ballots == {}
     # A cloud denser than detect.vote_max_points gets one pass.
     dense = detect(dining, config=Config().replace(detect={"vote_max_points": 1000}))
     assert [d.to_dict() for d in dense.detections] == [d.to_dict() for d in one.detections]

@@ -329,7 +329,11 @@ def explain(
 ) -> list[dict[str, Any]]:
     """Per cluster: class probabilities, the constraints of the best classes and label costs.
 
-    This is what ``detect --explain`` prints (the thesis's Tables 4.2 and 4.9).
+    This is what ``detect --explain`` prints (the thesis's Tables 4.2 and 4.9). With the
+    vote, a cluster some pass found an object in also has ``passes``: per pass, its turn
+    and the label, best class and probability of its cluster sharing most of these
+    points, with their point IoU (the vote counts a pass at IoU 0.5 or more). With
+    segmentation by recognition, a chosen candidate has ``beat``: the candidates it beat.
 
     Parameters
     ----------
@@ -396,6 +400,8 @@ def explain(
                 "classes": classes,
             }
         )
+        if k in result.ballots:  # the vote: what every pass made of these points
+            rows[-1]["passes"] = [b.to_dict() for b in result.ballots[k]]
         if k in origin:  # segmentation by recognition: the candidates this one beat
             rows[-1]["beat"] = [
                 {

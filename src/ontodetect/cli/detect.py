@@ -457,6 +457,18 @@ def _detect_tiled(path, out, *, tile, overlap, executor, as_json, format, export
     console.print("wrote " + ", ".join(str(p) for p in written))
 
 
+def _ballot_line(b: dict) -> str:
+    """One pass of the vote, as ``--explain`` prints it."""
+    where = "first pass" if b["turn"] == 0 else f"pass turned {b['turn']:+g}°"
+    if b["class"] is None and b["label"] is None and b["num_points"] == 0:
+        return f"{where}: no cluster here"
+    what = b["label"] or "no object"
+    best = "" if b["class"] is None else f", best {b['class']} {b['probability']:.2f}"
+    share = "" if b["turn"] == 0 else f", point IoU {b['iou']:.2f}"
+    counts = "" if b["turn"] == 0 or b["label"] is None or b["counts"] else ", too little to count"
+    return f"{where}: {what}{best} ({b['num_points']} points{share}{counts})"
+
+
 def _print_explain(rows) -> None:
     for row in rows:
         head = (
@@ -464,6 +476,8 @@ def _print_explain(rows) -> None:
             f" -> {row['label'] or 'no label'}" + (f" ({row['reason']})" if row["reason"] else "")
         )
         console.print(Text(head, style="bold"))
+        for b in row.get("passes", []):
+            console.print("  " + _ballot_line(b))
         for o in row.get("beat", []):
             why = "no label" if o["label"] is None else f"{o['label']}, weight {o['weight']:.2f}"
             console.print(f"  beat a candidate of {o['source']} ({o['num_voxels']} voxels): {why}")

@@ -190,8 +190,10 @@ def detect(
         seg, scores, choices, found, timings = _one_pass(scan, config, shared, first=first)
         passes = others.results()
     timings["segment"] += before
+    ballots = {}
     if turned:
-        found, choices = _vote(cloud, seg, scores, choices, found, passes, ontology)
+        turns = vote_turns(len(turned) + 1, d.vote_turn)
+        found, choices, ballots = _vote(cloud, seg, scores, choices, found, passes, ontology, turns)
         timings["votes"] = time.perf_counter() - t0 - sum(timings.values())
     return numbered_result(
         cloud,
@@ -203,6 +205,7 @@ def detect(
         priors=priors,
         timings=timings,
         environment=environment,
+        ballots=ballots,
     )
 
 

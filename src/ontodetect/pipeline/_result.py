@@ -124,6 +124,10 @@ class Result:
     environment : dict
         Where the environment prior came from (``source``: ``scan``, ``images``,
         ``scan+images``, ``given`` or ``none``) and the P_N used (``rooms``).
+    ballots : dict of int to list
+        With the vote, for each cluster some pass found an object in: what every pass
+        made of its points (``pipeline._vote.Ballot``, the first pass first); empty
+        with one pass.
     """
 
     cloud: PointCloud
@@ -136,6 +140,7 @@ class Result:
     timings: dict[str, float] = field(default_factory=dict)
     candidates: list[Any] = field(default_factory=list)
     environment: dict[str, Any] = field(default_factory=dict)
+    ballots: dict[int, list[Any]] = field(default_factory=dict)
 
     @property
     def frame(self) -> dict[str, Any]:

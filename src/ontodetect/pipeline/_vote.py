@@ -8,6 +8,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -23,9 +24,11 @@ from ._result import Detection, _detection
 
 __all__ = [
     "VOTE_IOU",
+    "Ballot",
     "PassCluster",
     "class_for_label",
     "majority_labels",
+    "pass_ballots",
     "pass_probabilities",
     "vote_turns",
 ]
@@ -34,6 +37,111 @@ __all__ = [
 #: What the vote needs of a cluster of another pass: its sorted input rows, its
 #: P_obj|ont by class (with "none") and its label (None when it is no object).
 PassCluster = tuple[NDArray[np.int64], dict[str, float], str | None]
+
+
+@dataclass(frozen=True)
+class Ballot:
+    """What one pass made of the points of a cluster of the first pass (``--explain``).
+
+    Attributes
+    ----------
+    turn : float
+        The pass's turn of the scan (degrees; 0 for the first pass).
+    label : str or None
+        The label of that pass's cluster that covers these points best (None: no object).
+    iou : float
+        Point IoU of that cluster with the first pass's (0: no cluster shares a point).
+    num_points : int
+        That cluster's points.
+    best : str or None
+        Its most probable class other than "none", with ...
+    probability : float
+        ... that class's P_obj|ont in the pass.
+    """
+
+    turn: float
+    label: str | None
+    iou: float
+    num_points: int
+    best: str | None
+    probability: float
+
+    @property
+    def counts(self) -> bool:
+        """Whether the pass backs a label here (its cluster covers with IoU >= VOTE_IOU)."""
+        return self.label is not None and self.iou >= VOTE_IOU
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "turn": round(self.turn, 4),
+            "label": self.label,
+            "iou": round(self.iou, 4),
+            "num_points": self.num_points,
+            "class": self.best,
+            "probability": round(self.probability, 4),
+            "counts": self.counts,
+        }
+
+
+def _ballot(
+    turn: float, iou: float, rows: NDArray[np.int64], probs: Mapping[str, float], label
+) -> Ballot:
+    ranked = sorted(((p, n) for n, p in probs.items() if n != "none"), reverse=True)
+    p, best = ranked[0] if ranked else (0.0, None)
+    return Ballot(float(turn), label, float(iou), len(rows), best, float(p))
+
+
+def pass_ballots(
+    clusters: Mapping[int, NDArray[np.int64]],
+    first: Sequence[PassCluster],
+    others: Sequence[Sequence[PassCluster]],
+    turns: Sequence[float],
+) -> dict[int, list[Ballot]]:
+    """What every pass made of some clusters of the first pass (``detect --explain``).
+
+    Parameters
+    ----------
+    clusters : mapping of int to (k,) int
+        Sorted point rows of the first pass's clusters to explain, by cluster.
+    first : sequence of PassCluster
+        Every cluster of the first pass (its rows, probabilities and label).
+    others : sequence of sequences of PassCluster
+        Every cluster of every other pass.
+    turns : sequence of float
+        The other passes' turns (degrees), in the order of ``others``.
+
+    Returns
+    -------
+    dict of int to list of Ballot
+        For each cluster: the first pass's ballot, then one per other pass, made by the
+        cluster of that pass that shares most of its points (IoU).
+
+    Examples
+    --------
+    >>> a, b = np.arange(0, 10), np.arange(5, 30)
+    >>> out = pass_ballots({0: a}, [(a, {"chair": 0.8, "none": 0.2}, "chair")],
+    ...                    [[(b, {"table": 0.6, "none": 0.4}, "table")]], [0.7])
+    >>> [(v.turn, v.label, round(v.iou, 2), v.best, v.counts) for v in out[0]]
+    [(0.0, 'chair', 1.0, 'chair', True), (0.7, 'table', 0.17, 'table', False)]
+    """
+    if len(turns) != len(others):
+        raise InvalidParameterError("turns", f"one per other pass ({len(others)})", len(turns))
+    keys = sorted(clusters)
+    mine = [_rows(clusters[k]) for k in keys]
+    out = {k: [_ballot(0.0, 1.0, first[k][0], first[k][1], first[k][2])] for k in keys}
+    for turn, run in zip(turns, others):
+        if not keys:
+            break
+        theirs = [_rows(rows) for rows, _, _ in run]
+        iou = point_overlap(mine, theirs)[0] if theirs else np.zeros((len(mine), 0))
+        for i, k in enumerate(keys):
+            j = int(np.argmax(iou[i])) if iou.shape[1] else -1
+            if j < 0 or iou[i, j] <= 0:
+                out[k].append(Ballot(float(turn), None, 0.0, 0, None, 0.0))
+                continue
+            rows, probs, label = run[j]
+            out[k].append(_ballot(turn, iou[i, j], rows, probs, label))
+    return out
 
 
 def vote_turns(votes: int, step: float) -> list[float]:
@@ -171,13 +279,22 @@ def _vote(
     found: list[Detection],
     others: list[list[PassCluster]],
     ontology: Ontology,
-) -> tuple[list[Detection], list[LabelChoice]]:
+    turns: Sequence[float],
+) -> tuple[list[Detection], list[LabelChoice], dict[int, list[Ballot]]]:
     """Keep what a majority of the passes found (:func:`majority_labels`), on the first
     pass's clusters: a detection only the first pass made goes, and one the first pass
     missed but most of the others made comes back on the first pass's cluster. What is
-    kept carries the probabilities averaged over the passes (:func:`pass_probabilities`)."""
+    kept carries the probabilities averaged over the passes (:func:`pass_probabilities`).
+    The ballots (:func:`pass_ballots`) say what every pass made of each cluster that
+    some pass found an object in."""
     first = {d.cluster: d for d in found}
     rows = [np.sort(cloud.index[c.point_indices]) for c in seg]
+    ballots = pass_ballots(
+        {k: rows[k] for k in _found_anywhere(rows, first, others)},
+        [(r, s.probabilities, ch.label) for r, s, ch in zip(rows, scores, choices)],
+        others,
+        turns,
+    )
     kept = majority_labels(
         rows,
         {k: d.label for k, d in first.items()},
@@ -229,4 +346,19 @@ def _vote(
                 probabilities=mean,
             )
         )
-    return out, choices
+    return out, choices, ballots
+
+
+def _found_anywhere(
+    rows: Sequence[NDArray[np.int64]],
+    first: Mapping[int, Detection],
+    others: Sequence[Sequence[PassCluster]],
+) -> set[int]:
+    """The clusters of the first pass that a pass found an object in: the first pass's
+    detections, and the cluster sharing most points with each detection of another."""
+    keys = set(first)
+    dets = [_rows(r) for run in others for r, _, label in run if label is not None]
+    if dets and len(rows):
+        inter = point_overlap(dets, list(rows))[1]
+        keys.update(int(k) for k in np.argmax(inter, axis=1)[inter.max(axis=1) > 0])
+    return keys
