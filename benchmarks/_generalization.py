@@ -22,9 +22,11 @@ from numpy.typing import ArrayLike, NDArray
 
 from ontodetect.cloud import PointCloud, sensor_position
 from ontodetect.evaluation import Instance, match_instances, turn_cloud
+from ontodetect.geometry import point_overlap
 
 __all__ = [
     "JITTER_SIGMA",
+    "MISSED_CAUSES",
     "NOTHING",
     "OFFSET",
     "ROUNDING",
@@ -33,6 +35,7 @@ __all__ = [
     "SUBSAMPLE_SHARE",
     "false_detection_causes",
     "instance_names",
+    "missed_causes",
     "reappearance",
     "recall_by_group",
     "rows_to_values",
@@ -315,4 +318,84 @@ def recall_by_group(
         tally = out.setdefault(group_of.get(g.id, g.label), [0, 0])
         tally[0] += int(k >= 0)
         tally[1] += 1
+    return out
+
+
+#: Why a ground-truth object was missed (:func:`missed_causes`), in the order a pass's
+#: steps would lose it.
+MISSED_CAUSES = ("not clustered", "split", "merged", "scored", "vote")
+
+
+def missed_causes(
+    preds: Sequence[Instance],
+    gts: Sequence[Instance],
+    clusters: Sequence[Instance],
+    *,
+    iou_threshold: float = 0.25,
+) -> list[dict[str, Any]]:
+    """Where each missed ground-truth object was lost: segmentation, scoring or the vote.
+
+    Objects are matched as the evaluation matches them; for every object left unmatched,
+    the first pass's cluster sharing most of its points decides:
+
+    - ``not clustered``: no cluster holds any of its points;
+    - ``split``: that cluster holds less than half of the object;
+    - ``merged``: it holds half or more, but with so much else that the point IoU is
+      below ``iou_threshold``;
+    - ``scored``: it is the object (IoU at the threshold or more) and the first pass
+      labelled it otherwise (another class, or nothing);
+    - ``vote``: the first pass labelled it right and the other passes did not agree.
+
+    Parameters
+    ----------
+    preds, gts : sequences of Instance
+        Detections and the evaluated ground-truth objects (rows of the scan).
+    clusters : sequence of Instance
+        The first pass's clusters (rows of the scan), each with the label the first pass
+        gave it ("" for none): :attr:`ontodetect.evaluation.SceneOutcome.clusters`.
+
+    Returns
+    -------
+    list of dict
+        Per missed object, in the order of ``gts``: ``id``, ``label``, ``cause``, ``iou``
+        and ``cover`` (share of the object in the cluster) of the best cluster, and the
+        cluster's ``as`` (its first-pass label, "" for none).
+
+    Examples
+    --------
+    >>> gts = [Instance.make(1, "chair", range(10)), Instance.make(2, "chair", range(10, 20)),
+    ...        Instance.make(3, "table", range(60, 70))]
+    >>> clusters = [Instance.make(0, "chair", range(10)), Instance.make(1, "", range(10, 60)),
+    ...             Instance.make(2, "chair", range(60, 70))]
+    >>> [(m["id"], m["cause"], m["as"]) for m in missed_causes([], gts, clusters)]
+    [(1, 'vote', 'chair'), (2, 'merged', ''), (3, 'scored', 'chair')]
+    """
+    gts = list(gts)
+    m = match_instances(list(preds), gts, iou_threshold=iou_threshold)
+    missed = [g for g, k in zip(gts, m.gt_match) if k < 0]
+    if not missed:
+        return []
+    iou, inter = point_overlap([g.points for g in missed], [c.points for c in clusters])
+    out = []
+    for i, g in enumerate(missed):
+        if not len(clusters) or inter[i].max() == 0:
+            out.append({"id": g.id, "label": g.label, "cause": "not clustered",
+                        "iou": 0.0, "cover": 0.0, "as": ""})  # fmt: skip
+            continue
+        j = int(np.argmax(inter[i]))
+        cover = float(inter[i, j]) / len(g.points)
+        if iou[i, j] >= iou_threshold:
+            cause = "vote" if clusters[j].label == g.label else "scored"
+        else:
+            cause = "merged" if cover >= 0.5 else "split"
+        out.append(
+            {
+                "id": g.id,
+                "label": g.label,
+                "cause": cause,
+                "iou": round(float(iou[i, j]), 4),
+                "cover": round(cover, 4),
+                "as": clusters[j].label,
+            }
+        )
     return out

@@ -47,10 +47,12 @@ from rich.console import Console
 from rich.table import Table
 
 from benchmarks._generalization import (
+    MISSED_CAUSES,
     STABILITY_IOU,
     STABILITY_TURNS,
     false_detection_causes,
     instance_names,
+    missed_causes,
     reappearance,
     recall_by_group,
     rows_to_values,
@@ -392,6 +394,57 @@ def mistakes_and_families(
                 tally[0] += found
                 tally[1] += total
     return false, families, family_class
+
+
+def missed_summary(outcomes: Sequence[SceneOutcome]) -> dict[str, dict[str, Any]]:
+    """Threshold -> class -> how many objects were missed, by cause
+    (:func:`benchmarks._generalization.missed_causes`), and by kind and cause."""
+    out: dict[str, dict[str, Any]] = {k: {} for k in THRESHOLDS}
+    for o in outcomes:
+        if not o.clusters:
+            continue
+        _, what = scene_labels(o.source)
+        for key, thr in THRESHOLDS.items():
+            for m in missed_causes(o.preds, o.gts, o.clusters, iou_threshold=thr):
+                row = out[key].setdefault(
+                    m["label"], {"total": 0, "causes": Counter(), "kinds": {}}
+                )
+                row["total"] += 1
+                row["causes"][m["cause"]] += 1
+                kind = what.get(m["id"], (m["label"], m["label"]))[1]
+                row["kinds"].setdefault(kind, Counter())[m["cause"]] += 1
+    return {
+        key: {
+            c: {
+                "total": v["total"],
+                "causes": {k: v["causes"][k] for k in MISSED_CAUSES if v["causes"][k]},
+                "kinds": {k: dict(n) for k, n in sorted(v["kinds"].items())},
+            }
+            for c, v in sorted(rows.items())
+        }
+        for key, rows in out.items()
+    }
+
+
+def missed_table(title: str, summary: Mapping[str, Any]) -> Table:
+    """Missed objects by where they were lost (from :func:`missed_summary`)."""
+    t = Table(title=title, title_justify="left")
+    t.add_column("class")
+    t.add_column("missed @.25", justify="right")
+    for cause in MISSED_CAUSES:
+        t.add_column(cause, justify="right")
+    t.add_column("missed @.5", justify="right")
+    lo, hi = summary["iou@0.25"], summary["iou@0.5"]
+    for c in CLASSES:
+        a = lo.get(c, {"total": 0, "causes": {}})
+        b = hi.get(c, {"total": 0})
+        t.add_row(
+            c,
+            str(a["total"]),
+            *[str(a["causes"].get(k, 0)) for k in MISSED_CAUSES],
+            str(b["total"]),
+        )
+    return t
 
 
 def false_summary(false: Mapping[str, list[dict[str, Any]]]) -> dict[str, dict[str, Any]]:
@@ -854,6 +907,7 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
             },
             "chair_groups": chair_groups(families),
             "false_detections": false_summary(sim_false),
+            "missed": missed_summary(sim.scenes),
             "seconds": round(time.perf_counter() - t0, 1),
         }
         rooms = doc["simulated"]["rooms"]
@@ -873,6 +927,11 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
         console.print(
             false_table(
                 "Simulated: what the false detections are", doc["simulated"]["false_detections"]
+            )
+        )
+        console.print(
+            missed_table(
+                "Simulated: where the missed objects were lost", doc["simulated"]["missed"]
             )
         )
 
@@ -942,6 +1001,7 @@ def _run_real(
         "scans": [s.name for s in real.scenes],
         "per_class": dataset_figures(real),
         "false_detections": false_summary(real_false),
+        "missed": missed_summary(real.scenes),
         "seconds": round(time.perf_counter() - t0, 1),
     }
     console.print(
@@ -950,6 +1010,7 @@ def _run_real(
     console.print(
         false_table("Real: what the false detections are", doc["real"]["false_detections"])
     )
+    console.print(missed_table("Real: where the missed objects were lost", doc["real"]["missed"]))
     return real
 
 

@@ -128,6 +128,38 @@ def test_rows_beyond_the_labels_count_as_nothing():
     assert (f["is"], f["instance"]) == ("nothing", 0)
 
 
+def test_missed_objects_are_told_apart_by_where_they_were_lost():
+    gts = [
+        inst(1, "chair", range(0, 10)),  # found
+        inst(2, "chair", range(10, 20)),  # right cluster, labelled a table by the first pass
+        inst(3, "chair", range(20, 30)),  # right cluster and label, dropped by the vote
+        inst(4, "chair", range(30, 40)),  # in a desk's cluster of 60 points
+        inst(5, "table", range(100, 120)),  # in pieces of 4 points
+        inst(6, "sofa", range(200, 210)),  # in no cluster at all
+    ]
+    clusters = [
+        inst(0, "chair", range(0, 10)),
+        inst(1, "table", range(10, 21)),
+        inst(2, "chair", range(20, 30)),
+        inst(3, "table", range(30, 90)),
+        *[inst(4 + k, "", range(100 + 4 * k, 104 + 4 * k)) for k in range(5)],
+    ]
+    preds = [inst(1, "chair", range(0, 10), 0.9), inst(2, "table", range(30, 90), 0.8)]
+    got = G.missed_causes(preds, gts, clusters)
+    assert [(m["id"], m["cause"], m["as"]) for m in got] == [
+        (2, "scored", "table"),
+        (3, "vote", "chair"),
+        (4, "merged", "table"),
+        (5, "split", ""),
+        (6, "not clustered", ""),
+    ]
+    merged = got[2]
+    assert merged["cover"] == 1.0 and merged["iou"] == pytest.approx(10 / 60, abs=1e-4)
+    assert got[3]["cover"] == pytest.approx(0.2) and got[4]["iou"] == 0.0
+    assert G.missed_causes(preds, gts[:1], clusters) == []
+    assert {m["cause"] for m in got} <= set(G.MISSED_CAUSES)
+
+
 def test_recall_by_group_separates_armchairs_from_office_chairs():
     gts = [
         inst(1, "chair", range(0, 10)),

@@ -55,6 +55,7 @@ def test_sigma_floors_are_those_calibration_used():
         "width": 0.03,
         "breadth": 0.03,
         "area": 0.01,
+        "spread": 1.0,
         "fill": 0.03,
         "open_below": 0.03,
         "seen_below": 0.03,

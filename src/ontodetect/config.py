@@ -408,6 +408,15 @@ class PlaneConfig(_Section):
         "Plane hypotheses: 'surface' (through the most planar points along their normals; "
         "deterministic) or 'random' (MSAC's random triples, Table 4.1).",
     )
+    # Issue 21's curved parts: a shell seat or a body-shaped backrest is cut by MSAC into
+    # strips; joined along their seams they are one part. Opt-in until the benchmark
+    # says it pays (docs/benchmarks.md, "Curved parts").
+    curved: bool = _param(
+        False,
+        Boolean(),
+        "Offer the scoring each cluster's curved surfaces (planes meeting along seams with "
+        "normals within 30 deg) as parts besides its planes.",
+    )
 
 
 @dataclass(frozen=True)

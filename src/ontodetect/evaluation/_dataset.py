@@ -333,6 +333,10 @@ class SceneOutcome:
         The seed of this run (see :func:`evaluate_dataset`'s ``seeds``).
     pred_boxes, gt_boxes : tuple of BoxInstance
         The detections' boxes and the ground-truth boxes (:func:`scene_boxes`), for box AP.
+    clusters : tuple of Instance
+        The first pass's clusters (rows of the input file), each with the label that pass
+        gave it ("" for none), to tell where a missed object went (empty for stored
+        detections).
     """
 
     name: str
@@ -348,6 +352,7 @@ class SceneOutcome:
     seed: int | None = None
     pred_boxes: tuple[BoxInstance, ...] = ()
     gt_boxes: tuple[BoxInstance, ...] = ()
+    clusters: tuple[Instance, ...] = ()
 
     @property
     def ok(self) -> bool:
@@ -444,6 +449,7 @@ def evaluate_scene(
     t0 = time.perf_counter()
     try:
         scene = load_scene(source, class_ids, turn=turn)
+        clusters: list[Instance] = []
         if detections_dir is not None:
             preds, pred_boxes = read_scene_detections(
                 detections_dir, source.name, scene.num_points, boxes=True
@@ -464,6 +470,7 @@ def evaluate_scene(
                 BoxInstance.make(d.label, d.center, d.size, d.yaw, d.score)
                 for d in result.detections
             ]
+            clusters = _first_pass_clusters(result)
             if save_dir is not None:
                 _save_detections(result, Path(save_dir) / name)
     except OntoDetectError as exc:
@@ -479,7 +486,21 @@ def evaluate_scene(
         timings,
         pred_boxes=tuple(pred_boxes),
         gt_boxes=tuple(scene.gt_boxes),
+        clusters=tuple(clusters),
     )
+
+
+def _first_pass_clusters(result: Any) -> list[Instance]:
+    """The first pass's clusters as instances labelled as that pass labelled them (the
+    vote may have dropped the label since: the class it had stays in ``extra``)."""
+    index = np.asarray(result.cloud.index)
+    onto = result.ontology
+    out = []
+    for k, (c, choice) in enumerate(zip(result.segmentation, result.choices)):
+        name = choice.extra.get("class")
+        label = onto[name].label if name is not None and name in onto else ""
+        out.append(Instance.make(k, label, index[c.point_indices]))
+    return out
 
 
 def variant_name(scene: str, turn: float | None = None, seed: int | None = None) -> str:

@@ -274,6 +274,10 @@ for _feature in (
     Feature("width", "part", "Pr", "extent along its minor axis (m)", 0.03,
             plane=_attribute("width")),
     Feature("area", "part", "Pr", "covered area (m²)", 0.01, plane=_attribute("area")),
+    Feature("spread", "part", "Or",
+            "spread of the surface's normals (degrees, area-weighted RMS): 0 for a plane, "
+            "more for a curved patch (planes.curved)", 1.0,
+            plane=lambda p: float(getattr(p, "spread", 0.0))),
     Feature("fill", "part", "De", "covered area / (length × width): how solid the patch is",
             0.03, plane=_fill),
     Feature("density", "part", "De", "points per m² (depends on the sensor)",
@@ -322,7 +326,7 @@ for _feature in (
     Feature("bottom", "cluster", "cluster", "lowest point above the floor (m)", 0.02,
             cluster=_attribute("bottom")),
     Feature("planes", "cluster", "cluster", "number of planes found in the cluster", 0.5,
-            cluster=lambda desc: float(len(desc.planes))),
+            cluster=lambda desc: float(sum(not getattr(p, "members", ()) for p in desc.planes))),
     Feature("rise", "cluster", "cluster",
             "height of the cluster above its highest horizontal plane (m): a backrest rises "
             "above a seat, nothing rises above a cabinet top", 0.02,

@@ -147,10 +147,30 @@ class ClusterDescription:
         """:func:`continuations` of this cluster, worked out once for all classes."""
         return continuations(self)
 
+    @functools.cached_property
+    def conflicts(self) -> list[frozenset[int]]:
+        """For every plane, the planes no other part may take with it: a curved patch
+        (a plane with ``members``) and its member planes share their points."""
+        out: list[set[int]] = [set() for _ in self.planes]
+        members = [frozenset(getattr(p, "members", ())) for p in self.planes]
+        for k, mine in enumerate(members):
+            for m in mine:
+                out[k].add(m)
+                out[m].add(k)
+            for j in range(k):
+                if mine & members[j]:
+                    out[k].add(j)
+                    out[j].add(k)
+        return [frozenset(x) for x in out]
+
     @property
     def rise(self) -> float:
         """Height of the cluster above the top of its highest horizontal plane (m)."""
-        tops = [float(p.z_max) for p in self.planes if float(p.tilt) <= HORIZONTAL_TILT]
+        tops = [
+            float(p.z_max)
+            for p in self.planes
+            if float(p.tilt) <= HORIZONTAL_TILT and not getattr(p, "members", ())
+        ]
         return max(0.0, self.height - max(tops)) if tops else self.height
 
 
@@ -264,6 +284,8 @@ def _extra_log(cls: ObjectClass, planes: Sequence[Any]) -> np.ndarray:
             dtype=bool,
         )
         out[surface] = math.log(cls.extra_surface)
+    # A curved patch is its strips again: they cost when nothing explains them, it never.
+    out[[bool(getattr(p, "members", ())) for p in planes]] = 0.0
     return out
 
 
@@ -283,10 +305,15 @@ def continuations(desc: ClusterDescription) -> list[frozenset[int]]:
     """For every plane, the other planes of the cluster that continue its surface.
 
     Two patches with about the same normal and offset that touch are one top, one
-    seat or one backrest split by clutter, a seam or a gap in the scan.
+    seat or one backrest split by clutter, a seam or a gap in the scan; a curved patch
+    (``members``) continues its strips and they continue it.
     """
     planes = desc.planes
     out: list[set[int]] = [set() for _ in planes]
+    for k, p in enumerate(planes):  # a curved patch and its strips are one surface
+        for m in getattr(p, "members", ()):
+            out[k].add(m)
+            out[m].add(k)
     for (i, j), rel in desc.relations.items():
         if float(rel.angle) > CONTINUE_ANGLE or float(rel.distance) > CONTINUE_GAP:
             continue
@@ -371,11 +398,11 @@ def _combo_log(
 def _exhaustive_assignment(unary, missing, candidates, rel_terms, plane_log_extra, desc):
     """Every combination of candidates, in ``itertools.product`` order; the first best wins.
     Exponential in the number of parts: kept as the reference the tests compare with."""
-    more = desc.continued
+    more, conflicts = desc.continued, desc.conflicts
     best_log, best_assign = -math.inf, None
     for combo in itertools.product(*candidates):
         used = [c for c in combo if c is not None]
-        if len(used) != len(set(used)):
+        if len(used) != len(set(used)) or any(conflicts[c] & set(used) for c in used):
             continue
         total = _combo_log(combo, unary, missing, plane_log_extra, more, best_log, rel_terms, desc)
         if total > best_log:
@@ -399,7 +426,7 @@ def _search_assignment(unary, missing, candidates, rel_terms, plane_log_extra, d
     plane explained twice counts once, so the bound never falls below what a completion
     reaches; a branch is cut only when its bound is below the best total found.
     """
-    more = desc.continued
+    more, conflicts = desc.continued, desc.conflicts
     n = len(candidates)
     gain = np.maximum(-plane_log_extra, 0.0)
 
@@ -425,7 +452,7 @@ def _search_assignment(unary, missing, candidates, rel_terms, plane_log_extra, d
                 state["log"], state["assign"] = total, tuple(combo)
             return
         for c in candidates[p]:
-            if c is not None and c in used:
+            if c is not None and (c in used or conflicts[c] & used):
                 continue
             if c is None:
                 step, new_explained = math.log(missing[p]), explained
@@ -511,7 +538,11 @@ def score_class(
     cluster_factor = 1.0
     used = {c for c in best_assign if c is not None}
     used = used.union(*(more[c] for c in used))
-    unexplained = [k for k in range(len(desc.planes)) if k not in used]
+    unexplained = [
+        k
+        for k, plane in enumerate(desc.planes)
+        if k not in used and not getattr(plane, "members", ())
+    ]
     if unexplained and (cls.extra_plane < 1.0 or cls.extra_surface is not None):
         f = math.exp(float(sum(plane_log_extra[k] for k in unexplained)))
         cluster_factor *= f

@@ -222,7 +222,7 @@ def _parts(
     for name, k in assignment.items():
         if k is None:
             continue
-        plane = cluster.planes[k]
+        plane = cluster.scored_planes[k]
         normal = rot.T @ np.asarray(plane.normal, dtype=np.float64)
         centroid = prep.from_level(np.asarray(plane.centroid, dtype=np.float64)[None])[0]
         voxels = cluster.voxels[np.asarray(plane.inliers)]

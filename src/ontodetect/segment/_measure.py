@@ -52,8 +52,8 @@ def describe_cluster(
     ``hidden_below``: see :func:`hidden_heights`; ``open_below``: see
     :func:`open_below`; ``seen_below``: see :func:`seen_below`)."""
     return ClusterDescription(
-        planes=cluster.planes,
-        relations=cluster.relations_by_pair,
+        planes=cluster.scored_planes,
+        relations=cluster.scored_relations,
         length=cluster.length,
         breadth=cluster.breadth,
         height=cluster.height,
@@ -130,12 +130,12 @@ def open_below(seg: Segmentation) -> list[list[float]]:
     floor = prep.voxels.centers[prep.structure_label == FLOOR]
     out: list[list[float]] = []
     if not prep.floor_found or not len(floor):
-        return [[math.nan] * len(c.planes) for c in seg]
+        return [[math.nan] * len(c.scored_planes) for c in seg]
     seen = np.unique(_cell_keys(floor[:, :2], FLOOR_CELL))
     for c in seg:
         values = []
         centers = np.asarray(c.centers)
-        for plane in c.planes:
+        for plane in c.scored_planes:
             if float(plane.tilt) > HORIZONTAL_TILT or float(plane.height) < OPEN_BELOW_HEIGHT:
                 values.append(math.nan)
                 continue
@@ -193,15 +193,16 @@ def seen_below(seg: Segmentation) -> list[list[float]]:
     out: list[list[float]] = []
     for c in seg:
         centers = np.asarray(c.centers)
-        flat = [float(p.tilt) <= HORIZONTAL_TILT for p in c.planes]
+        planes = c.scored_planes
+        flat = [float(p.tilt) <= HORIZONTAL_TILT for p in planes]
         values = []
-        for i, plane in enumerate(c.planes):
+        for i, plane in enumerate(planes):
             if not flat[i]:
                 values.append(math.nan)
                 continue
             lower = [
                 q
-                for k, q in enumerate(c.planes)
+                for k, q in enumerate(planes)
                 if flat[k] and float(q.centroid[2]) <= float(plane.centroid[2]) - SEEN_BELOW_DROP
             ]
             if not lower:

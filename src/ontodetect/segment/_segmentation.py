@@ -28,7 +28,7 @@ from ._cluster import (
     region_growing,
 )
 from ._parts import PartSeed, horizontal_parts, seeded_clusters
-from .planes import extract_planes, plane_relations
+from .planes import curved_patches, extract_planes, plane_relations
 
 __all__ = ["Box", "Cluster", "Segmentation", "cluster", "clusters_of_voxels", "segment"]
 
@@ -165,6 +165,12 @@ class Cluster:
         The horizontal parts it grew from (empty for a density region).
     surface : float
         Estimated surface (m²).
+    patches : list
+        With ``planes.curved``, its curved surfaces (``ontodetect.segment.planes.Patch``:
+        planes joined along seams); the scoring's parts may take them as planes.
+    patch_relations : list
+        ``PlaneRelation`` between every two of ``planes`` and ``patches`` (empty without
+        patches).
     """
 
     id: int
@@ -177,6 +183,8 @@ class Cluster:
     flags: dict[str, str] = field(default_factory=dict)
     parts: list[PartSeed] = field(default_factory=list)
     surface: float = 0.0
+    patches: list[Any] = field(default_factory=list)
+    patch_relations: list[Any] = field(default_factory=list)
 
     @property
     def num_points(self) -> int:
@@ -210,6 +218,18 @@ class Cluster:
     def relations_by_pair(self) -> dict[tuple[int, int], Any]:
         """Relations keyed by plane pair ``(i, j)`` with i < j."""
         return {(min(r.i, r.j), max(r.i, r.j)): r for r in self.relations}
+
+    @property
+    def scored_planes(self) -> list[Any]:
+        """What the ontology's parts may take: the planes, then the curved patches."""
+        return [*self.planes, *self.patches]
+
+    @property
+    def scored_relations(self) -> dict[tuple[int, int], Any]:
+        """Relations between every two of :attr:`scored_planes`, keyed ``(i, j)``, i < j."""
+        if not self.patches:
+            return self.relations_by_pair
+        return {(min(r.i, r.j), max(r.i, r.j)): r for r in self.patch_relations}
 
     def to_dict(self, index: NDArray[np.int64] | None = None) -> dict[str, Any]:
         """JSON-ready; ``point_indices`` are mapped through ``index`` (file rows) if given."""
@@ -535,7 +555,7 @@ def _build_cluster(
     """One cluster of the voxels ``vox`` (centres ``pts``): its box, MSAC planes, flags."""
     cc, pc = config.cluster, config.planes
     cols = None if prepared.colors is None else prepared.colors[vox]
-    planes, relations = [], []
+    planes, relations, patches, patch_relations = [], [], [], []
     box = upright_box(pts)
     surface = len(vox) * prepared.spacing**2
     # Clusters flagged too small get no planes: nothing will be made of them.
@@ -558,6 +578,10 @@ def _build_cluster(
             variation=variation,
         )
         relations = plane_relations(pts, planes) if len(planes) > 1 else []
+        if pc.curved and relations:
+            patches = curved_patches(pts, planes, relations, cols, rng=rng)
+            if patches:
+                patch_relations = plane_relations(pts, [*planes, *patches])
     flags = _flags(surface, box, planes if fit_planes else None, cc)
     return Cluster(
         id=cid,
@@ -570,6 +594,8 @@ def _build_cluster(
         flags=flags,
         parts=parts,
         surface=float(surface),
+        patches=patches,
+        patch_relations=patch_relations,
     )
 
 

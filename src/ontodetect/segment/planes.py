@@ -23,7 +23,9 @@ and only the best few of each batch are scored on all points.
 
 from __future__ import annotations
 
+import dataclasses
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from numbers import Integral, Real
 from typing import Any
@@ -40,9 +42,11 @@ from ..geometry import as_points, canonical_sign
 
 __all__ = [
     "MsacResult",
+    "Patch",
     "Plane",
     "PlaneModel",
     "PlaneRelation",
+    "curved_patches",
     "extract_planes",
     "msac",
     "plane_relations",
@@ -112,6 +116,17 @@ RELATION_MAX_POINTS = 2000
 ABOVE_MIN_GAP = 0.02
 #: ... and at least this share of the smaller xy footprint is shared.
 ABOVE_MIN_OVERLAP = 0.25
+
+#: :func:`curved_patches`: planes of a cluster whose normals differ by at most this
+#: (degrees) and that meet (``PATCH_GAP``) are strips of one curved surface. Half the
+#: least angle between a seat and its backrest (60 deg, Table 4.1's recline) keeps a
+#: seat and a back apart however they are cut.
+PATCH_ANGLE = 30.0
+#: ... meeting means coming within this (m): one sampling step of a scan, a seam.
+PATCH_GAP = 0.04
+#: ... and a group is curved when two of its planes differ by more than this (degrees);
+#: flatter groups are pieces of one plane, which the scoring already joins.
+PATCH_MIN_TURN = 10.0
 
 
 def _readonly(a: NDArray[Any]) -> NDArray[Any]:
@@ -760,6 +775,124 @@ class Plane:
     def is_vertical(self, tolerance: float = ORIENTATION_TOLERANCE_DEG) -> bool:
         """True when the tilt is at least ``90 - tolerance`` degrees."""
         return self.tilt >= 90.0 - tolerance
+
+
+@dataclass(frozen=True, eq=False)
+class Patch(Plane):
+    """A curved surface of a cluster: MSAC planes (its ``members``) that meet along seams
+    with normals turning by less than :data:`PATCH_ANGLE` from one to the next, measured
+    as one surface (a shell seat, a body-shaped backrest, a sloping cushion).
+
+    Its features are a plane's, fitted to all the members' inliers (the normal is the
+    least-spread direction, the mean of a gently curved surface); ``rms`` tells how far
+    the surface departs from that plane.
+
+    Attributes
+    ----------
+    members : tuple of int
+        Indices of its planes in the cluster's list.
+    spread : float
+        Root mean square angle (degrees) between the members' normals and the patch's,
+        weighted by the members' areas: 0 for a plane.
+    """
+
+    members: tuple[int, ...] = ()
+    spread: float = 0.0
+
+
+def curved_patches(
+    points: ArrayLike,
+    planes: Sequence[Plane],
+    relations: Sequence[PlaneRelation],
+    colors: ArrayLike | None = None,
+    *,
+    floor_z: float = 0.0,
+    max_angle: float = PATCH_ANGLE,
+    max_gap: float = PATCH_GAP,
+    rng: int | np.random.Generator | None = None,
+) -> list[Patch]:
+    """The curved surfaces among a cluster's planes (:class:`Patch`).
+
+    Planes join when their normals differ by at most ``max_angle`` degrees and they
+    come within ``max_gap`` (``relations``, :func:`plane_relations`); each group of
+    joined planes whose normals turn by more than :data:`PATCH_MIN_TURN` somewhere is
+    one patch. MSAC cuts a curved backrest into strips that each cost as clutter and
+    each measure a fraction of the back; the patch measures the back.
+
+    Parameters
+    ----------
+    points : (n, 3) float
+        The points the planes were extracted from (their ``inliers`` index them).
+    planes : sequence of Plane
+    relations : sequence of PlaneRelation
+        Of those planes.
+    colors : (n, 3) float, optional
+    floor_z : float
+        Height of the floor, for the patches' ``height``.
+    max_angle, max_gap : float
+        Degrees and metres, > 0.
+    rng : int or numpy.random.Generator, optional
+        For the patches' rectangle fit, as :func:`extract_planes`.
+
+    Returns
+    -------
+    list of Patch
+        By their lowest member.
+
+    Examples
+    --------
+    >>> t = np.linspace(0.0, 0.7, 8)  # a backrest bent by 10 degrees at each of 7 seams
+    >>> pts, planes = [], []
+    >>> gen = np.random.default_rng(0)
+    >>> for k, a in enumerate(np.radians(10.0 * np.arange(8))):
+    ...     u = gen.uniform(0.0, 0.1, 200)
+    ...     x = sum(0.1 * np.cos(np.radians(10.0 * i)) for i in range(k)) + u * np.cos(a)
+    ...     z = sum(0.1 * np.sin(np.radians(10.0 * i)) for i in range(k)) + u * np.sin(a)
+    ...     pts.append(np.c_[x, gen.uniform(0.0, 0.5, 200), z + 0.4])
+    >>> pts = np.vstack(pts)
+    >>> planes = extract_planes(pts, threshold=0.005, max_planes=8, rng=0)
+    >>> patches = curved_patches(pts, planes, plane_relations(pts, planes), rng=0)
+    >>> len(patches), len(patches[0].members) >= 4, patches[0].spread > 10
+    (1, True, True)
+    """
+    pts = _as_points(points)
+    max_angle = _positive("max_angle", max_angle)
+    max_gap = _positive("max_gap", max_gap, allow_zero=True)
+    n = len(planes)
+    joined = [
+        (r.i, r.j)
+        for r in relations
+        if float(r.angle) <= max_angle and float(r.distance) <= max_gap
+    ]
+    if not joined:
+        return []
+    i, j = np.array(joined, dtype=np.int64).T
+    _, label = connected_components(coo_matrix((np.ones(len(i)), (i, j)), shape=(n, n)))
+    groups = [np.flatnonzero(label == g).tolist() for g in range(int(label.max()) + 1)]
+    rgb = None if colors is None else np.asarray(colors, dtype=np.float64)
+    gen = np.random.default_rng(rng)
+    centroid = _col_mean(pts)
+    out: list[Patch] = []
+    for members in sorted(groups):
+        if len(members) < 2:
+            continue
+        normals = np.array([planes[i].normal for i in members], dtype=np.float64)
+        turn = np.degrees(np.arccos(np.clip(np.abs(normals @ normals.T), 0.0, 1.0)))
+        if turn.max() <= PATCH_MIN_TURN:
+            continue
+        idx = np.unique(np.concatenate([np.asarray(planes[i].inliers) for i in members]))
+        fit = _describe(
+            pts, idx, rgb, floor_z=float(floor_z), cluster_centroid=centroid,
+            area_cell=None, rng=gen,
+        )  # fmt: skip
+        if fit is None:
+            continue
+        areas = np.array([float(planes[i].area) for i in members])
+        cos = np.clip(np.abs(normals @ fit.normal), 0.0, 1.0)
+        spread = float(np.sqrt(np.average(np.degrees(np.arccos(cos)) ** 2, weights=areas)))
+        fields = {f.name: getattr(fit, f.name) for f in dataclasses.fields(Plane)}
+        out.append(Patch(**fields, members=tuple(members), spread=spread))
+    return out
 
 
 def _in_plane_basis(normal: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -1,0 +1,152 @@
+"""Curved parts (issue 21): planes that meet along seams with normals turning a little from
+one to the next are one surface (``segment.planes.curved_patches``), which the scoring's
+parts may take as a plane (``planes.curved``)."""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from ontodetect.config import Config
+from ontodetect.ontology import ClusterDescription, builtin_ontology, continuations
+from ontodetect.ontology._score import score_class
+from ontodetect.segment.planes import (
+    PATCH_ANGLE,
+    Patch,
+    curved_patches,
+    extract_planes,
+    plane_relations,
+)
+
+
+def _bent(turn_deg, strips=6, strip=0.1, width=0.45, z0=0.45, per=300, seed=0):
+    """A backrest bent by ``turn_deg`` at each seam between ``strips`` flat strips, rising
+    from ``z0``: each strip leans back ``turn_deg`` more than the one below."""
+    gen = np.random.default_rng(seed)
+    pts, x, z = [], 0.0, z0
+    for k in range(strips):
+        a = math.radians(90.0 - turn_deg * k)  # from upright, leaning back
+        u = gen.uniform(0.0, strip, per)
+        pts.append(np.c_[x - u * math.cos(a), gen.uniform(0.0, width, per), z + u * math.sin(a)])
+        x, z = x - strip * math.cos(a), z + strip * math.sin(a)
+    return np.vstack(pts)
+
+
+def _seat(z=0.45, depth=0.42, width=0.45, per=900, seed=1):
+    gen = np.random.default_rng(seed)
+    return np.c_[gen.uniform(0.0, depth, per), gen.uniform(0.0, width, per), np.full(per, z)]
+
+
+def _patches(pts, threshold=0.004):
+    planes = extract_planes(pts, threshold=threshold, max_planes=12, min_points=40, rng=0)
+    return planes, curved_patches(pts, planes, plane_relations(pts, planes), rng=0)
+
+
+def test_a_bent_backrest_is_one_patch_measured_whole():
+    pts = _bent(12.0)
+    planes, patches = _patches(pts)
+    assert len(planes) >= 4  # MSAC cuts it into strips
+    (patch,) = patches
+    assert isinstance(patch, Patch) and len(patch.members) == len(planes)
+    # The patch measures the back: about 0.6 m along its curve, 0.45 m across.
+    assert patch.length == pytest.approx(0.56, abs=0.06)
+    assert patch.width == pytest.approx(0.45, abs=0.05)
+    assert max(p.length for p in planes) < 0.5  # no strip does
+    assert patch.num_points == sum(p.num_points for p in planes)
+    # The strips' normals turn by 60 deg in all; about the mean they spread by 15-25.
+    assert 12.0 < patch.spread < 30.0
+    assert 40.0 < patch.tilt < 80.0  # between the lowest strip's 90 and the top's 30
+
+
+def test_a_seat_and_its_backrest_are_never_one_patch():
+    # Upright back on the seat's rear edge, 90 deg: far more than PATCH_ANGLE.
+    pts = np.vstack([_seat(), _bent(0.0, strips=4)])
+    planes, patches = _patches(pts)
+    assert len(planes) == 2 and patches == []
+
+
+def test_flat_pieces_and_stacked_planes_are_no_patch():
+    # One top cut in two by a gap: pieces of one plane (the scoring joins those already).
+    gen = np.random.default_rng(2)
+    top = np.c_[gen.uniform(0, 1.2, 2000), gen.uniform(0, 0.7, 2000), np.full(2000, 0.72)]
+    top = top[np.abs(top[:, 0] - 0.6) > 0.02]
+    planes = extract_planes(top, threshold=0.004, max_planes=4, connectivity=0.035, rng=0)
+    assert len(planes) >= 2 and all(p.tilt < 1.0 for p in planes)
+    assert curved_patches(top, planes, plane_relations(top, planes)) == []
+    # An arm 15 cm above a seat, tilted 15 deg: within the angle, but they do not meet.
+    arm = _seat(z=0.6, depth=0.5, width=0.1, per=300, seed=3)
+    arm[:, 2] += np.tan(np.radians(15.0)) * arm[:, 0]
+    pts = np.vstack([_seat(), arm])
+    planes, patches = _patches(pts)
+    assert len(planes) == 2 and patches == []
+
+
+@settings(max_examples=15, deadline=None)
+@given(turn=st.floats(12.0, PATCH_ANGLE - 2.0), seed=st.integers(0, 1000))
+def test_any_gentle_bend_is_one_patch_whatever_the_sampling(turn, seed):
+    pts = _bent(turn, strips=4, seed=seed)
+    planes, patches = _patches(pts)
+    if len(planes) >= 2:
+        assert len(patches) == 1
+        assert sorted(patches[0].members) == list(range(len(planes)))
+
+
+def _chair_with_bent_back(curved):
+    pts = np.vstack([_seat(), _bent(12.0, z0=0.46)])
+    planes = extract_planes(pts, threshold=0.004, max_planes=12, min_points=40, rng=0)
+    patches = curved_patches(pts, planes, plane_relations(pts, planes), rng=0) if curved else []
+    everything = [*planes, *patches]
+    rels = {(r.i, r.j): r for r in plane_relations(pts, everything)}
+    span = pts.max(axis=0) - pts.min(axis=0)
+    desc = ClusterDescription(
+        planes=everything,
+        relations=rels,
+        length=float(max(span[:2])),
+        breadth=float(min(span[:2])),
+        height=float(pts[:, 2].max()),
+        bottom=0.0,
+    )
+    return planes, patches, desc
+
+
+def test_a_chair_takes_its_bent_back_whole_and_no_strip_costs_as_clutter():
+    chair = builtin_ontology()["chair"]
+    planes, _, flat = _chair_with_bent_back(curved=False)
+    _, patches, bent = _chair_with_bent_back(curved=True)
+    (patch,) = patches
+    k = len(planes)  # the patch's index among the scored planes
+    # The patch continues its strips and they continue it; it conflicts with them.
+    assert set(patch.members) <= continuations(bent)[k]
+    assert set(patch.members) <= bent.conflicts[k]
+    without = score_class(chair, flat)
+    with_patch = score_class(chair, bent)
+    assert with_patch.assignment["backrest"] == k
+    extra = [c for c in with_patch.constraints if c.feature == "extra_plane"]
+    assert extra == []  # every strip is explained by the patch
+    assert with_patch.log_likelihood > without.log_likelihood
+    # No other part takes a strip of the back the backrest took whole.
+    taken = [v for v in with_patch.assignment.values() if v is not None]
+    assert not set(taken) & set(patch.members)
+    slow = score_class(chair, bent, search_exhaustively=True)
+    assert slow.assignment == with_patch.assignment
+    assert slow.log_likelihood == with_patch.log_likelihood
+
+
+def test_the_option_offers_patches_to_the_scoring_only():
+    from ontodetect.segment import segment
+    from ontodetect.synth import synthesize
+
+    cloud = synthesize("living_room", "rgbd", seed=1, points=50_000).cloud
+    off = segment(cloud, Config(), seed=0, ontology=builtin_ontology())
+    on = segment(cloud, Config().with_overrides(["planes.curved=true"]), seed=0)
+    # Same clusters and planes; the patches come on top.
+    assert [len(c.voxels) for c in on] == [len(c.voxels) for c in off]
+    assert all(len(a.planes) == len(b.planes) for a, b in zip(on, off))
+    assert all(c.patches == [] and c.scored_planes == c.planes for c in off)
+    with_patches = [c for c in on if c.patches]
+    assert with_patches
+    for c in with_patches:
+        n = len(c.planes) + len(c.patches)
+        assert len(c.scored_planes) == n and len(c.scored_relations) == n * (n - 1) // 2
