@@ -150,3 +150,83 @@ def test_the_option_offers_patches_to_the_scoring_only():
     for c in with_patches:
         n = len(c.planes) + len(c.patches)
         assert len(c.scored_planes) == n and len(c.scored_relations) == n * (n - 1) // 2
+
+
+# -- what holds a top up -------------------------------------------------------------------
+def _panel(x0, x1, y0, y1, z0, z1, per, gen):
+    """An upright rectangle from (x0, y0) to (x1, y1), z0 to z1 high."""
+    t = gen.uniform(0.0, 1.0, per)
+    return np.c_[x0 + t * (x1 - x0), y0 + t * (y1 - y0), gen.uniform(z0, z1, per)]
+
+
+def _desk(monitor=False):
+    gen = np.random.default_rng(5)
+    top = np.c_[gen.uniform(0, 1.2, 2500), gen.uniform(0, 0.6, 2500), np.full(2500, 0.74)]
+    parts = [
+        top,
+        _panel(0.05, 1.15, 0.55, 0.55, 0.3, 0.7, 900, gen),  # modesty panel at the back
+        _panel(0.8, 0.8, 0.02, 0.58, 0.0, 0.7, 900, gen),  # pedestal's inner side
+        _panel(1.15, 1.15, 0.02, 0.58, 0.0, 0.7, 900, gen),  # pedestal's outer side
+    ]
+    if monitor:  # rises above the top: not what holds it up
+        parts.append(_panel(0.2, 0.6, 0.3, 0.3, 0.76, 1.1, 700, gen))
+    pts = np.vstack(parts)
+    planes = extract_planes(pts, threshold=0.005, max_planes=8, min_points=100, rng=0)
+    rels = {(r.i, r.j): r for r in plane_relations(pts, planes)}
+    span = pts.max(axis=0) - pts.min(axis=0)
+    desc = ClusterDescription(
+        planes=planes, relations=rels, length=float(span[0]), breadth=float(span[1]),
+        height=float(pts[:, 2].max()), bottom=0.0,
+    )  # fmt: skip
+    return planes, desc
+
+
+def _desk_class(supports):
+    from ontodetect.ontology import parse_ontology
+
+    text = f"""format: ontodetect.ontology/1
+classes:
+  desk:
+    extra_plane: 0.5
+    parts:
+      top:
+        supports: {str(supports).lower()}
+        tilt: {{max: 4, soft: 3}}
+        height: [0.6, 0.9]
+"""
+    return parse_ontology(text, "desk.yaml")["desk"]
+
+
+def test_a_top_explains_what_holds_it_up_and_not_what_stands_on_it():
+    planes, desc = _desk()
+    assert len(planes) == 4
+    top = next(k for k, p in enumerate(planes) if p.tilt < 5)
+    assert desc.below[top] == frozenset(set(range(4)) - {top})  # panel and pedestal
+    held = score_class(_desk_class(True), desc)
+    bare = score_class(_desk_class(False), desc)
+    assert held.assignment == bare.assignment == {"top": top}
+    assert not [c for c in held.constraints if c.feature == "extra_plane"]
+    extra = [c for c in bare.constraints if c.feature == "extra_plane"]
+    assert extra and extra[0].value == 3.0
+    assert held.log_likelihood > bare.log_likelihood
+    # A monitor on the top rises above it: it still costs.
+    planes, desc = _desk(monitor=True)
+    top = next(k for k, p in enumerate(planes) if p.tilt < 5)
+    screen = next(k for k, p in enumerate(planes) if p.z_max > 1.0)
+    assert screen not in desc.below[top]
+    held = score_class(_desk_class(True), desc)
+    (extra,) = [c for c in held.constraints if c.feature == "extra_plane"]
+    assert extra.value == 1.0
+    slow = score_class(_desk_class(True), desc, search_exhaustively=True)
+    assert slow.assignment == held.assignment and slow.log_likelihood == held.log_likelihood
+
+
+def test_supports_must_be_true_or_false():
+    from ontodetect.errors import InvalidOntologyError
+    from ontodetect.ontology import parse_ontology
+
+    text = (
+        "format: ontodetect.ontology/1\nclasses:\n  desk:\n    parts:\n      top: {supports: 3}\n"
+    )
+    with pytest.raises(InvalidOntologyError, match="supports"):
+        parse_ontology(text, "desk.yaml")

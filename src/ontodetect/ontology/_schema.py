@@ -84,6 +84,9 @@ class Part:
     cad_search: tuple[float, float] | None = None
     #: A ``back`` part: CAD fitting takes the points this far (m) above the seat as it.
     cad_above_seat: float | None = None
+    #: A top: the upright planes under its outline that do not rise above it (legs,
+    #: panels, a pedestal) hold it up, and the plane that takes it explains them.
+    supports: bool = False
 
     @property
     def height_span(self) -> tuple[float, float] | None:
@@ -608,8 +611,14 @@ def _part(name: str, spec: Any, path: tuple[Any, ...], seeds: Mapping[str, Any])
         raise _Problem(path + ("required",), f"expected true or false, got {required!r}")
     missing = _probability(spec, "missing", path, DEFAULT_MISSING[required])
     occluded = _probability(spec, "occluded", path)
+    supports = spec.get("supports", False)
+    if not isinstance(supports, bool):
+        raise _Problem(path + ("supports",), f"expected true or false, got {supports!r}")
     constraints = _constraints(
-        spec, PART_FEATURES, path, {"required", "missing", "occluded", "description", "seed", "cad"}
+        spec,
+        PART_FEATURES,
+        path,
+        {"required", "missing", "occluded", "description", "seed", "cad", "supports"},
     )
     seed = spec.get("seed")
     if seed is not None:
@@ -634,6 +643,7 @@ def _part(name: str, spec: Any, path: tuple[Any, ...], seeds: Mapping[str, Any])
         cad=cad,
         cad_search=search,
         cad_above_seat=above,
+        supports=supports,
     )
 
 

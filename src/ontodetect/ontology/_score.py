@@ -70,6 +70,11 @@ EXTRA_PLANE_AREA = 0.08
 CONTINUE_ANGLE = 10.0
 CONTINUE_STEP = 0.05
 CONTINUE_GAP = 0.1
+#: A part that ``supports`` explains the planes at least this tilted (degrees) ...
+UPRIGHT_TILT = 60.0
+#: ... whose centroid lies within its outline widened by this (m), and whose top rises no
+#: more than this above its own.
+SUPPORT_MARGIN = 0.05
 #: An unexplained horizontal plane of at least this area (m²) is a second surface, which
 #: costs a class's ``extra_surface`` (a seat beside a "table top" is not clutter on it).
 SURFACE_AREA = 0.25
@@ -146,6 +151,33 @@ class ClusterDescription:
     def continued(self) -> list[frozenset[int]]:
         """:func:`continuations` of this cluster, worked out once for all classes."""
         return continuations(self)
+
+    @functools.cached_property
+    def below(self) -> list[frozenset[int]]:
+        """For every level plane, the upright planes that stand under it: their centroid
+        within its outline (``SUPPORT_MARGIN``) and their top no higher than its own."""
+        out: list[frozenset[int]] = []
+        for c, top in enumerate(self.planes):
+            if (
+                float(top.tilt) > HORIZONTAL_TILT
+                or getattr(top, "members", ())
+                or getattr(top, "axes", None) is None
+            ):
+                out.append(frozenset())
+                continue
+            axes = np.asarray(top.axes, dtype=float)
+            half = np.array([float(top.length), float(top.width)]) / 2 + SUPPORT_MARGIN
+            mine = set()
+            for k, p in enumerate(self.planes):
+                if k == c or float(p.tilt) < UPRIGHT_TILT or getattr(p, "members", ()):
+                    continue
+                if float(p.z_max) > float(top.z_max) + SUPPORT_MARGIN:
+                    continue
+                uv = axes @ (np.asarray(p.centroid, dtype=float) - np.asarray(top.centroid))
+                if np.all(np.abs(uv) <= half):
+                    mine.add(k)
+            out.append(frozenset(mine))
+        return out
 
     @functools.cached_property
     def conflicts(self) -> list[frozenset[int]]:
@@ -371,14 +403,15 @@ def _combo_log(
     unary: np.ndarray,
     missing: Sequence[float],
     plane_log_extra: np.ndarray,
-    more: Sequence[frozenset[int]],
+    more: Sequence[Sequence[frozenset[int]]],
     best_log: float,
     rel_terms: Sequence[tuple[int, int, Any]],
     desc: ClusterDescription,
 ) -> float:
-    """Log-likelihood of one assignment (-inf when it cannot beat ``best_log``)."""
+    """Log-likelihood of one assignment (-inf when it cannot beat ``best_log``);
+    ``more[p][c]``: the planes part ``p`` explains with plane ``c`` besides it."""
     used = [c for c in combo if c is not None]
-    explained = set(used).union(*(more[c] for c in used))
+    explained = set(used).union(*(more[p][c] for p, c in enumerate(combo) if c is not None))
     total = float(plane_log_extra.sum()) - float(sum(plane_log_extra[c] for c in explained))
     for p, c in enumerate(combo):
         total += unary[p, c] if c is not None else math.log(missing[p])
@@ -395,10 +428,10 @@ def _combo_log(
     return total
 
 
-def _exhaustive_assignment(unary, missing, candidates, rel_terms, plane_log_extra, desc):
+def _exhaustive_assignment(unary, missing, candidates, rel_terms, plane_log_extra, desc, more):
     """Every combination of candidates, in ``itertools.product`` order; the first best wins.
     Exponential in the number of parts: kept as the reference the tests compare with."""
-    more, conflicts = desc.continued, desc.conflicts
+    conflicts = desc.conflicts
     best_log, best_assign = -math.inf, None
     for combo in itertools.product(*candidates):
         used = [c for c in combo if c is not None]
@@ -415,7 +448,7 @@ def _exhaustive_assignment(unary, missing, candidates, rel_terms, plane_log_extr
 _BOUND_SLACK = 1e-9
 
 
-def _search_assignment(unary, missing, candidates, rel_terms, plane_log_extra, desc):
+def _search_assignment(unary, missing, candidates, rel_terms, plane_log_extra, desc, more):
     """Branch and bound over the parts, in the exhaustive search's order: the same best
     assignment (ties: the first in ``itertools.product`` order), without visiting the
     combinations that cannot beat the best found so far.
@@ -426,14 +459,14 @@ def _search_assignment(unary, missing, candidates, rel_terms, plane_log_extra, d
     plane explained twice counts once, so the bound never falls below what a completion
     reaches; a branch is cut only when its bound is below the best total found.
     """
-    more, conflicts = desc.continued, desc.conflicts
+    conflicts = desc.conflicts
     n = len(candidates)
     gain = np.maximum(-plane_log_extra, 0.0)
 
     def option_bound(p: int, c: int | None) -> float:
         if c is None:
             return math.log(missing[p])
-        return float(unary[p, c]) + float(sum(gain[k] for k in {c} | more[c]))
+        return float(unary[p, c]) + float(sum(gain[k] for k in {c} | more[p][c]))
 
     # best[p]: the most parts p.. can add, each on its own.
     best_rest = [0.0] * (n + 1)
@@ -457,7 +490,7 @@ def _search_assignment(unary, missing, candidates, rel_terms, plane_log_extra, d
             if c is None:
                 step, new_explained = math.log(missing[p]), explained
             else:
-                new_explained = explained | {c} | more[c]
+                new_explained = explained | {c} | more[p][c]
                 step = float(unary[p, c]) + float(sum(gain[k] for k in new_explained - explained))
             bound = partial + step + best_rest[p + 1]
             if bound + _BOUND_SLACK < state["log"]:
@@ -498,9 +531,17 @@ def score_class(
     # Planes no part explains cost ``extra_plane`` each, weighted by their size: a stool
     # is not a chair with a back, but a chair is still a chair with a caster in view.
     plane_log_extra = _extra_log(cls, desc.planes)
-    more = desc.continued
+    more = [
+        [
+            desc.continued[c] | desc.below[c] if part.supports else desc.continued[c]
+            for c in range(len(desc.planes))
+        ]
+        for part in cls.parts
+    ]
     search = _exhaustive_assignment if search_exhaustively else _search_assignment
-    best_log, best_assign = search(unary, missing, candidates, rel_terms, plane_log_extra, desc)
+    best_log, best_assign = search(
+        unary, missing, candidates, rel_terms, plane_log_extra, desc, more
+    )
 
     constraints: list[ConstraintValue] = []
     factors: dict[str, dict[str, float]] = {}
@@ -537,7 +578,7 @@ def score_class(
     cluster_log = 0.0
     cluster_factor = 1.0
     used = {c for c in best_assign if c is not None}
-    used = used.union(*(more[c] for c in used))
+    used = used.union(*(more[p][c] for p, c in enumerate(best_assign) if c is not None))
     unexplained = [
         k
         for k, plane in enumerate(desc.planes)
