@@ -159,7 +159,7 @@ def _panel(x0, x1, y0, y1, z0, z1, per, gen):
     return np.c_[x0 + t * (x1 - x0), y0 + t * (y1 - y0), gen.uniform(z0, z1, per)]
 
 
-def _desk(monitor=False):
+def _desk(monitor=False, open_below=True):
     gen = np.random.default_rng(5)
     top = np.c_[gen.uniform(0, 1.2, 2500), gen.uniform(0, 0.6, 2500), np.full(2500, 0.74)]
     parts = [
@@ -174,9 +174,11 @@ def _desk(monitor=False):
     planes = extract_planes(pts, threshold=0.005, max_planes=8, min_points=100, rng=0)
     rels = {(r.i, r.j): r for r in plane_relations(pts, planes)}
     span = pts.max(axis=0) - pts.min(axis=0)
+    # The floor seen under the top (open_below) over 0.6 of its footprint: knee space.
+    seen = [0.6 if p.tilt < 5 else float("nan") for p in planes]
     desc = ClusterDescription(
         planes=planes, relations=rels, length=float(span[0]), breadth=float(span[1]),
-        height=float(pts[:, 2].max()), bottom=0.0,
+        height=float(pts[:, 2].max()), bottom=0.0, open_below=seen if open_below else None,
     )  # fmt: skip
     return planes, desc
 
@@ -219,6 +221,21 @@ def test_a_top_explains_what_holds_it_up_and_not_what_stands_on_it():
     assert extra.value == 1.0
     slow = score_class(_desk_class(True), desc, search_exhaustively=True)
     assert slow.assignment == held.assignment and slow.log_likelihood == held.log_likelihood
+
+
+def test_only_a_top_with_the_floor_seen_under_it_is_held_up():
+    # Under a closed box the sides are the box: no floor seen, nothing explained.
+    from dataclasses import replace
+
+    planes, desc = _desk()
+    top = next(k for k, p in enumerate(planes) if p.tilt < 5)
+    closed = replace(
+        desc, open_below=[0.1 if k == top else float("nan") for k in range(4)], scene={}
+    )
+    unknown = replace(desc, open_below=None, scene={})  # not measured (a single view)
+    assert desc.below[top] and closed.below[top] == unknown.below[top] == frozenset()
+    held = score_class(_desk_class(True), closed)
+    assert [c.value for c in held.constraints if c.feature == "extra_plane"] == [3.0]
 
 
 def test_supports_must_be_true_or_false():

@@ -75,6 +75,10 @@ UPRIGHT_TILT = 60.0
 #: ... whose centroid lies within its outline widened by this (m), and whose top rises no
 #: more than this above its own.
 SUPPORT_MARGIN = 0.05
+#: ... and only under a top the floor was seen under, over at least this share of its
+#: footprint (``open_below``; the built-in table's own bound): legs and a pedestal with
+#: knee space hold a top up; under a closed box the sides are the box.
+SUPPORT_OPEN = 0.35
 #: An unexplained horizontal plane of at least this area (m²) is a second surface, which
 #: costs a class's ``extra_surface`` (a seat beside a "table top" is not clutter on it).
 SURFACE_AREA = 0.25
@@ -154,14 +158,19 @@ class ClusterDescription:
 
     @functools.cached_property
     def below(self) -> list[frozenset[int]]:
-        """For every level plane, the upright planes that stand under it: their centroid
-        within its outline (``SUPPORT_MARGIN``) and their top no higher than its own."""
+        """For every level plane the floor was seen under (``open_below`` at least
+        ``SUPPORT_OPEN``), the upright planes that stand under it: their centroid within
+        its outline (``SUPPORT_MARGIN``) and their top no higher than its own. What a part
+        with ``supports`` explains besides its plane."""
         out: list[frozenset[int]] = []
+        seen = self.scene_values("open_below")
         for c, top in enumerate(self.planes):
+            floor_seen = math.nan if seen is None else float(seen[c])
             if (
                 float(top.tilt) > HORIZONTAL_TILT
                 or getattr(top, "members", ())
                 or getattr(top, "axes", None) is None
+                or not floor_seen >= SUPPORT_OPEN
             ):
                 out.append(frozenset())
                 continue
