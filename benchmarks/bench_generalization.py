@@ -374,9 +374,16 @@ def scene_labels(source: SceneSource) -> tuple[np.ndarray, dict[int, tuple[str, 
 
 def mistakes_and_families(
     outcomes: Sequence[SceneOutcome],
-) -> tuple[dict[str, list[dict[str, Any]]], dict[str, dict[str, list[int]]], dict[str, str]]:
-    """False detections (per threshold) and recall per family (kind) over scenes."""
+) -> tuple[
+    dict[str, list[dict[str, Any]]],
+    dict[str, dict[str, list[int]]],
+    dict[str, str],
+    dict[str, list[dict[str, Any]]],
+]:
+    """False detections (per threshold), recall per family (kind), and the missed objects
+    with where they were lost (per threshold, with their kind) over scenes."""
     false: dict[str, list[dict[str, Any]]] = {k: [] for k in THRESHOLDS}
+    missed: dict[str, list[dict[str, Any]]] = {k: [] for k in THRESHOLDS}
     families: dict[str, dict[str, list[int]]] = {k: {} for k in THRESHOLDS}
     family_class: dict[str, str] = {}
     for o in outcomes:
@@ -387,32 +394,29 @@ def mistakes_and_families(
         for key, thr in THRESHOLDS.items():
             for f in false_detection_causes(o.preds, o.gts, rows, what, iou_threshold=thr):
                 false[key].append({"scene": o.name, **f})
+            if o.clusters:
+                for m in missed_causes(o.preds, o.gts, o.clusters, iou_threshold=thr):
+                    kind = kinds.get(m["id"], m["label"])
+                    missed[key].append({"scene": o.name, "kind": kind, **m})
             for fam, (found, total) in recall_by_group(
                 o.preds, o.gts, kinds, iou_threshold=thr
             ).items():
                 tally = families[key].setdefault(fam, [0, 0])
                 tally[0] += found
                 tally[1] += total
-    return false, families, family_class
+    return false, families, family_class, missed
 
 
-def missed_summary(outcomes: Sequence[SceneOutcome]) -> dict[str, dict[str, Any]]:
+def missed_summary(missed: Mapping[str, list[dict[str, Any]]]) -> dict[str, dict[str, Any]]:
     """Threshold -> class -> how many objects were missed, by cause
     (:func:`benchmarks._generalization.missed_causes`), and by kind and cause."""
-    out: dict[str, dict[str, Any]] = {k: {} for k in THRESHOLDS}
-    for o in outcomes:
-        if not o.clusters:
-            continue
-        _, what = scene_labels(o.source)
-        for key, thr in THRESHOLDS.items():
-            for m in missed_causes(o.preds, o.gts, o.clusters, iou_threshold=thr):
-                row = out[key].setdefault(
-                    m["label"], {"total": 0, "causes": Counter(), "kinds": {}}
-                )
-                row["total"] += 1
-                row["causes"][m["cause"]] += 1
-                kind = what.get(m["id"], (m["label"], m["label"]))[1]
-                row["kinds"].setdefault(kind, Counter())[m["cause"]] += 1
+    out: dict[str, dict[str, Any]] = {k: {} for k in missed}
+    for key, items in missed.items():
+        for m in items:
+            row = out[key].setdefault(m["label"], {"total": 0, "causes": Counter(), "kinds": {}})
+            row["total"] += 1
+            row["causes"][m["cause"]] += 1
+            row["kinds"].setdefault(m["kind"], Counter())[m["cause"]] += 1
     return {
         key: {
             c: {
@@ -884,7 +888,7 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
             doc["rooms"] = sorted(wanted)
         sim = evaluate_dataset(folder, scenes=sim_sources, jobs=jobs, detect_options=opts)
         by_name = {s.name: s for s in scans}
-        sim_false, families, family_class = mistakes_and_families(sim.scenes)
+        sim_false, families, family_class, sim_missed = mistakes_and_families(sim.scenes)
         by_room = grouped(sim.scenes, lambda o: by_name[o.name].room)
         by_variant = grouped(sim.scenes, lambda o: by_name[o.name].variant)
         room_counts = Counter(by_name[o.name].room for o in sim.scenes)
@@ -907,7 +911,7 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
             },
             "chair_groups": chair_groups(families),
             "false_detections": false_summary(sim_false),
-            "missed": missed_summary(sim.scenes),
+            "missed": missed_summary(sim_missed),
             "seconds": round(time.perf_counter() - t0, 1),
         }
         rooms = doc["simulated"]["rooms"]
@@ -996,12 +1000,12 @@ def _run_real(
     """(a): the real development scans, printed and put in ``doc["real"]``."""
     t0 = time.perf_counter()
     real = evaluate_dataset(args.real, scenes=real_scenes, jobs=jobs, detect_options=opts)
-    real_false, _, _ = mistakes_and_families(real.scenes)
+    real_false, _, _, real_missed = mistakes_and_families(real.scenes)
     doc["real"] = {
         "scans": [s.name for s in real.scenes],
         "per_class": dataset_figures(real),
         "false_detections": false_summary(real_false),
-        "missed": missed_summary(real.scenes),
+        "missed": missed_summary(real_missed),
         "seconds": round(time.perf_counter() - t0, 1),
     }
     console.print(

@@ -460,7 +460,7 @@ def _detect_tiled(path, out, *, tile, overlap, executor, as_json, format, export
 def _ballot_line(b: dict) -> str:
     """One pass of the vote, as ``--explain`` prints it."""
     where = "first pass" if b["turn"] == 0 else f"pass turned {b['turn']:+g}°"
-    if b["class"] is None and b["label"] is None and b["num_points"] == 0:
+    if b["num_points"] == 0:  # no cluster of this pass shares a point with it
         return f"{where}: no cluster here"
     what = b["label"] or "no object"
     best = "" if b["class"] is None else f", best {b['class']} {b['probability']:.2f}"

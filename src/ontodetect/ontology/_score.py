@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ._features import CUT_MARGIN, FEATURES
+from ._features import CUT_MARGIN, FEATURES, patch_members
 from ._gaussian import Gaussian
 from ._schema import ObjectClass, Ontology, Part
 
@@ -168,7 +168,7 @@ class ClusterDescription:
             floor_seen = math.nan if seen is None else float(seen[c])
             if (
                 float(top.tilt) > HORIZONTAL_TILT
-                or getattr(top, "members", ())
+                or patch_members(top)
                 or getattr(top, "axes", None) is None
                 or not floor_seen >= SUPPORT_OPEN
             ):
@@ -178,7 +178,7 @@ class ClusterDescription:
             half = np.array([float(top.length), float(top.width)]) / 2 + SUPPORT_MARGIN
             mine = set()
             for k, p in enumerate(self.planes):
-                if k == c or float(p.tilt) < UPRIGHT_TILT or getattr(p, "members", ()):
+                if k == c or float(p.tilt) < UPRIGHT_TILT or patch_members(p):
                     continue
                 if float(p.z_max) > float(top.z_max) + SUPPORT_MARGIN:
                     continue
@@ -193,7 +193,7 @@ class ClusterDescription:
         """For every plane, the planes no other part may take with it: a curved patch
         (a plane with ``members``) and its member planes share their points."""
         out: list[set[int]] = [set() for _ in self.planes]
-        members = [frozenset(getattr(p, "members", ())) for p in self.planes]
+        members = [frozenset(patch_members(p)) for p in self.planes]
         for k, mine in enumerate(members):
             for m in mine:
                 out[k].add(m)
@@ -210,7 +210,7 @@ class ClusterDescription:
         tops = [
             float(p.z_max)
             for p in self.planes
-            if float(p.tilt) <= HORIZONTAL_TILT and not getattr(p, "members", ())
+            if float(p.tilt) <= HORIZONTAL_TILT and not patch_members(p)
         ]
         return max(0.0, self.height - max(tops)) if tops else self.height
 
@@ -326,7 +326,7 @@ def _extra_log(cls: ObjectClass, planes: Sequence[Any]) -> np.ndarray:
         )
         out[surface] = math.log(cls.extra_surface)
     # A curved patch is its strips again: they cost when nothing explains them, it never.
-    out[[bool(getattr(p, "members", ())) for p in planes]] = 0.0
+    out[[bool(patch_members(p)) for p in planes]] = 0.0
     return out
 
 
@@ -352,7 +352,7 @@ def continuations(desc: ClusterDescription) -> list[frozenset[int]]:
     planes = desc.planes
     out: list[set[int]] = [set() for _ in planes]
     for k, p in enumerate(planes):  # a curved patch and its strips are one surface
-        for m in getattr(p, "members", ()):
+        for m in patch_members(p):
             out[k].add(m)
             out[m].add(k)
     for (i, j), rel in desc.relations.items():
@@ -540,13 +540,12 @@ def score_class(
     # Planes no part explains cost ``extra_plane`` each, weighted by their size: a stool
     # is not a chair with a back, but a chair is still a chair with a caster in view.
     plane_log_extra = _extra_log(cls, desc.planes)
-    more = [
-        [
-            desc.continued[c] | desc.below[c] if part.supports else desc.continued[c]
-            for c in range(len(desc.planes))
-        ]
-        for part in cls.parts
-    ]
+    # What a part explains besides its plane: the plane's continuations, and for a part
+    # that ``supports``, the upright planes standing under it (``desc.below``).
+    held = desc.continued
+    if any(part.supports for part in cls.parts):
+        held = [c | b for c, b in zip(desc.continued, desc.below)]
+    more = [held if part.supports else desc.continued for part in cls.parts]
     search = _exhaustive_assignment if search_exhaustively else _search_assignment
     best_log, best_assign = search(
         unary, missing, candidates, rel_terms, plane_log_extra, desc, more
@@ -589,9 +588,7 @@ def score_class(
     used = {c for c in best_assign if c is not None}
     used = used.union(*(more[p][c] for p, c in enumerate(best_assign) if c is not None))
     unexplained = [
-        k
-        for k, plane in enumerate(desc.planes)
-        if k not in used and not getattr(plane, "members", ())
+        k for k, plane in enumerate(desc.planes) if k not in used and not patch_members(plane)
     ]
     if unexplained and (cls.extra_plane < 1.0 or cls.extra_surface is not None):
         f = math.exp(float(sum(plane_log_extra[k] for k in unexplained)))

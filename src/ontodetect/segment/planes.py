@@ -841,9 +841,7 @@ def curved_patches(
 
     Examples
     --------
-    >>> t = np.linspace(0.0, 0.7, 8)  # a backrest bent by 10 degrees at each of 7 seams
-    >>> pts, planes = [], []
-    >>> gen = np.random.default_rng(0)
+    >>> pts, gen = [], np.random.default_rng(0)  # a back bent by 10 degrees at 7 seams
     >>> for k, a in enumerate(np.radians(10.0 * np.arange(8))):
     ...     u = gen.uniform(0.0, 0.1, 200)
     ...     x = sum(0.1 * np.cos(np.radians(10.0 * i)) for i in range(k)) + u * np.cos(a)
