@@ -89,8 +89,13 @@ LIFTED_BOTTOM = 0.2
 #: the cluster's lowest visible point (m).
 SHELTER_TOLERANCE = 0.05
 #: A part counts as hidden below a lifted cluster when the centre of its height
-#: constraint is less than this above the cluster's lowest point (m).
+#: constraint is less than this above the cluster's lowest point (m) ...
 HIDDEN_MARGIN = 0.1
+#: ... or, beside a neighbour's surface (``shelter``), less than this: what shows of a
+#: chair pushed under a desk may begin at its seat's rear edge, and a seat anywhere in EN
+#: 1335-1's adjustable range (420-530 mm) must count; its lowest, 0.42 m, lies 0.13 m
+#: under the 0.55 m centre of Table 4.1's seating plane range (35-75 cm).
+SHELTERED_MARGIN = 0.15
 
 
 @dataclass(frozen=True)
@@ -386,8 +391,8 @@ def missing_factor(part: Part, desc: ClusterDescription) -> float:
 
     - a neighbouring surface stands about as high as its lowest visible point
       (``desc.shelter``), and the part belongs just below what is visible (the
-      centre of its height range is less than ``HIDDEN_MARGIN`` above the cluster's
-      bottom, and the top of the range is not below it); or
+      centre of its height range is less than ``SHELTERED_MARGIN`` above the
+      cluster's bottom, and the top of the range is not below it); or
     - in a single view, the cluster itself hides the height the part belongs at
       from the sensor (the centre of its height range lies under
       ``desc.hidden_below`` and not more than ``HIDDEN_MARGIN`` below the cluster's
@@ -399,7 +404,7 @@ def missing_factor(part: Part, desc: ClusterDescription) -> float:
     height = part.constraints.get("height")
     span = None if height is None else _height_span(height)
     if float(desc.shelter) >= bottom - SHELTER_TOLERANCE and (
-        span is None or (span[0] < bottom + HIDDEN_MARGIN and bottom <= span[1])
+        span is None or (span[0] < bottom + SHELTERED_MARGIN and bottom <= span[1])
     ):
         return max(part.missing, part.occluded)
     if span is not None and bottom - HIDDEN_MARGIN <= span[0] <= float(desc.hidden_below):
