@@ -15,7 +15,7 @@ from ontodetect import InvalidParameterError, point_cloud
 from ontodetect.cloud import DataWarning, pixel_grid, sensor_position
 from ontodetect.config import Config
 from ontodetect.ontology import ClusterDescription, builtin_ontology
-from ontodetect.ontology._score import missing_factor
+from ontodetect.ontology._score import cluster_log_factor, missing_factor
 from ontodetect.pipeline import detect, hidden_heights
 from ontodetect.preprocess import smooth_depth
 from ontodetect.synth import synthesize
@@ -139,12 +139,14 @@ def test_hidden_height_lies_under_the_top_and_rises_with_distance(top, eye, d):
         assert math.isclose((top - near) * d / (eye - top), 0.3, rel_tol=1e-9)
 
 
-def _backrest_only(bottom: float, hidden_below: float, shelter: float = -math.inf):
+def _backrest_only(
+    bottom: float, hidden_below: float, shelter: float = -math.inf, breadth: float = 0.2
+):
     return ClusterDescription(
         planes=[],
         relations={},
         length=0.5,
-        breadth=0.2,
+        breadth=breadth,
         height=0.95,
         bottom=bottom,
         shelter=shelter,
@@ -163,6 +165,24 @@ def test_a_seat_hidden_behind_its_backrest_counts_as_occluded():
     assert missing_factor(seat, _backrest_only(0.75, hidden_below=1.1)) == seat.missing
     # standing on the floor: its lower part is not hidden but absent
     assert missing_factor(seat, _backrest_only(0.05, hidden_below=0.85)) == seat.missing
+
+
+def test_the_depth_a_single_view_hides_is_only_a_lower_bound():
+    rule = builtin_ontology()["chair"].cluster.constraints["breadth"]  # {min: 0.15, soft: 0.05}
+    thin = 0.06  # a backrest's own depth, seen from behind
+    fused = cluster_log_factor(rule, _backrest_only(0.4, -math.inf, breadth=thin), "breadth")
+    hidden = cluster_log_factor(rule, _backrest_only(0.4, 0.85, breadth=thin), "breadth")
+    assert fused == pytest.approx(float(rule.log(thin)))  # fused: the breadth as seen
+    assert math.exp(fused) < 0.25 < 0.85 < math.exp(hidden) < 1.0
+    # the mean of the rule over the 30 cm behind what is seen
+    expected = np.log(np.mean(np.exp(rule.log(np.linspace(thin, thin + 0.3, 13)))))
+    assert hidden == pytest.approx(expected)
+    # what hides nothing behind it above its own bottom is measured as seen
+    low = _backrest_only(0.4, 0.3, breadth=thin)
+    assert cluster_log_factor(rule, low, "breadth") == pytest.approx(fused)
+    # a deep enough cluster costs nothing either way
+    deep = [_backrest_only(0.4, h, breadth=0.45) for h in (-math.inf, 0.85)]
+    assert [cluster_log_factor(rule, d, "breadth") for d in deep] == pytest.approx([0.0, 0.0])
 
 
 def test_an_office_chair_seen_from_behind_is_found_in_a_single_frame():

@@ -49,6 +49,10 @@ CUT_MARGIN = 0.05
 #: mean of the constraint over this span (m) above the seen top.
 CUT_SPAN = 0.6
 CUT_SAMPLES = 13
+#: In a single view, a cluster that hides what stands behind it shows only its facing
+#: side: its depth is only known to be at least what is seen, and may go on this far (m)
+#: behind, a seat's depth (the shadow ``segment.SELF_SHADOW`` a seat is hidden in).
+HIDDEN_DEPTH = 0.3
 
 
 @dataclass(frozen=True)
@@ -247,15 +251,31 @@ def _rise_above(desc: Any, i: int) -> float:
     return max(0.0, float(desc.height) - float(desc.planes[i].z_max))
 
 
+def _at_least(g: Gaussian, value: float, span: float) -> float:
+    """Log of the mean of ``g`` over ``[value, value + span]``: the factor of a measure
+    only known to be at least ``value``, and at most ``span`` more."""
+    from scipy.special import logsumexp  # lazy: scipy.special only for a censored measure
+
+    logs = np.asarray(g.log(np.linspace(value, value + span, CUT_SAMPLES)))
+    return float(logsumexp(logs) - math.log(CUT_SAMPLES))
+
+
 def _censored_height(g: Gaussian, desc: Any, value: float) -> float:
     """The height of a cluster that reaches the altitude cut-off is only known to be at
     least what is seen: the mean of the Gaussian over ``CUT_SPAN`` above it."""
     if not desc.cut:
         return float(g.log(value))
-    from scipy.special import logsumexp  # lazy: scipy.special only when a cluster is cut
+    return _at_least(g, value, CUT_SPAN)
 
-    logs = np.asarray(g.log(np.linspace(value, value + CUT_SPAN, CUT_SAMPLES)))
-    return float(logsumexp(logs) - math.log(CUT_SAMPLES))
+
+def _censored_breadth(g: Gaussian, desc: Any, value: float) -> float:
+    """In a single view, a cluster that hides from the sensor what stands behind it (its
+    ``hidden_below`` above its bottom: a backrest seen from behind, its seat behind it)
+    shows only its facing side, so its breadth is only known to be at least what is seen:
+    the mean of the Gaussian over ``HIDDEN_DEPTH`` more. Elsewhere the breadth as seen."""
+    if not float(desc.hidden_below) > float(desc.bottom):
+        return float(g.log(value))
+    return _at_least(g, value, HIDDEN_DEPTH)
 
 
 # The sigma floors are calibration's absolute floors (units of the feature: m, degrees,
@@ -326,7 +346,7 @@ for _feature in (
     Feature("length", "cluster", "cluster", "longest horizontal side of the upright box (m)",
             0.03, cluster=_attribute("length")),
     Feature("breadth", "cluster", "cluster", "shortest horizontal side of the upright box (m)",
-            0.03, cluster=_attribute("breadth")),
+            0.03, cluster=_attribute("breadth"), log_factor=_censored_breadth),
     Feature("height", "cluster", "cluster", "top of the cluster above the floor (m)", 0.02,
             cluster=_attribute("height"), log_factor=_censored_height),
     Feature("bottom", "cluster", "cluster", "lowest point above the floor (m)", 0.02,
