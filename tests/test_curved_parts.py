@@ -150,6 +150,10 @@ def test_the_option_offers_patches_to_the_scoring_only():
     for c in with_patches:
         n = len(c.planes) + len(c.patches)
         assert len(c.scored_planes) == n and len(c.scored_relations) == n * (n - 1) // 2
+    # The pairs with a patch are measured on top of the planes' own: as if all at once.
+    c = with_patches[0]
+    whole = plane_relations(np.asarray(c.centers), c.scored_planes)
+    assert c.scored_relations == {(r.i, r.j): r for r in whole}
 
 
 # -- what holds a top up -------------------------------------------------------------------

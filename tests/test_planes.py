@@ -567,6 +567,21 @@ def test_relations_above_below_and_apart(rng):
     assert r.distance == pytest.approx(np.hypot(2.0 - 0.45, 0.8 - SEAT_Z), abs=0.02)
 
 
+def test_relations_since_measures_only_the_pairs_of_the_planes_added(rng):
+    pts, _ = chair(rng)
+    shelf = box(rng, [2.0, 0.0, 0.8], [2.5, 0.4, 0.8], 300, noise_axis=2)
+    pts = np.vstack([pts, shelf])
+    planes = extract_planes(pts, min_points=50, rng=0)
+    assert len(planes) == 3
+    every = plane_relations(pts, planes)
+    added = plane_relations(pts, planes, since=2)
+    assert added == [r for r in every if r.j >= 2] and len(added) == 2
+    assert plane_relations(pts, planes, since=len(planes)) == []
+    assert plane_relations(pts, planes, since=0) == every
+    with pytest.raises(InvalidParameterError, match="'since' parameter"):
+        plane_relations(pts, planes, since=-1)
+
+
 def test_relations_invalid_inputs(rng):
     pts, _ = chair(rng)
     planes = extract_planes(pts, min_points=50, rng=0)

@@ -581,7 +581,9 @@ def _build_cluster(
         if pc.curved and relations:
             patches = curved_patches(pts, planes, relations, cols, rng=rng)
             if patches:
-                patch_relations = plane_relations(pts, [*planes, *patches])
+                # The planes' own pairs are measured: only those with a patch are new.
+                added = plane_relations(pts, [*planes, *patches], since=len(planes))
+                patch_relations = [*relations, *added]
     flags = _flags(surface, box, planes if fit_planes else None, cc)
     return Cluster(
         id=cid,

@@ -1302,6 +1302,7 @@ def plane_relations(
     *,
     footprint_cell: float = FOOTPRINT_CELL,
     max_points: int = RELATION_MAX_POINTS,
+    since: int = 0,
 ) -> list[PlaneRelation]:
     """Measure every pair of planes: angle, adjacency, vertical order, footprint overlap.
 
@@ -1317,11 +1318,15 @@ def plane_relations(
         Planes with more inliers are thinned to about this many (every k-th inlier
         in input order) for the adjacency distance, which is then approximate
         within the thinned spacing.
+    since : int
+        Only the pairs whose ``j`` is at least this (>= 0): the planes from ``since`` on
+        were added to a list whose pairs were measured already (a pair's relation
+        depends on its two planes alone).
 
     Returns
     -------
     list of PlaneRelation
-        One per pair ``i < j``, in lexicographic order.
+        One per pair ``i < j`` (with ``j >= since``), in lexicographic order.
 
     Raises
     ------
@@ -1342,6 +1347,7 @@ def plane_relations(
     pts = _as_points(points)
     cell = _positive("footprint_cell", footprint_cell)
     max_points = _integer("max_points", max_points, 1)
+    since = _integer("since", since, 0)
     samples: list[NDArray[np.float64]] = []
     footprints: list[NDArray[np.int64]] = []
     for k, plane in enumerate(planes):
@@ -1360,7 +1366,7 @@ def plane_relations(
     trees: dict[int, cKDTree] = {}
     relations: list[PlaneRelation] = []
     for i in range(len(planes)):
-        for j in range(i + 1, len(planes)):
+        for j in range(max(i + 1, since), len(planes)):
             if j not in trees:
                 trees[j] = cKDTree(samples[j])
             distance = float(trees[j].query(samples[i], k=1)[0].min())
