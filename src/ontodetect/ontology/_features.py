@@ -51,7 +51,8 @@ CUT_SPAN = 0.6
 CUT_SAMPLES = 13
 #: In a single view, a cluster that hides what stands behind it shows only its facing
 #: side: its depth is only known to be at least what is seen, and may go on this far (m)
-#: behind, a seat's depth (the shadow ``segment._measure.SELF_SHADOW`` a seat is hidden in).
+#: behind, a seat's depth; the shadow a hidden seat is sought in is as deep
+#: (``segment._measure.SELF_SHADOW`` is this value).
 HIDDEN_DEPTH = 0.3
 
 

@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 
 from ..geometry import box_footprint
 from ..ontology import ClusterDescription
+from ..ontology._features import HIDDEN_DEPTH
 from ..ontology._score import HORIZONTAL_TILT
 from ..preprocess._structure import FLOOR
 from ._segmentation import Cluster, Segmentation
@@ -218,8 +219,9 @@ def seen_below(seg: Segmentation) -> list[list[float]]:
 
 
 #: What a cluster hides behind it must lie in its shadow for at least this far (m),
-#: about the depth of a seat behind its backrest.
-SELF_SHADOW = 0.3
+#: about the depth of a seat behind its backrest: the depth the scoring lets a single
+#: view's cluster go on behind what is seen (``ontology._features.HIDDEN_DEPTH``).
+SELF_SHADOW = HIDDEN_DEPTH
 #: The sensor must stand at least this far (m, horizontally) from the cluster's centre.
 SELF_SHADOW_DISTANCE = 0.5
 
