@@ -1,6 +1,7 @@
 """Ontology scoring on hand-made clusters with known answers."""
 
 import math
+import re
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -467,6 +468,54 @@ def test_bad_yaml_and_wrong_format(tmp_path):
         parse_ontology("classes: [", "x.yaml")
     with pytest.raises(InvalidOntologyError, match="expected format"):
         parse_ontology("classes: {}", "x.yaml")
+
+
+@pytest.mark.parametrize(
+    "name", ["furniture.yaml", "literature.yaml", "places205.yaml", "sh3d_classes.yaml"]
+)
+def test_shipped_files_read_the_same_with_libyaml(name):
+    """The built-in ontology is read with libyaml's parser: every shipped file gives it
+    the same values, and every key the same line, as the pure-Python one."""
+    from importlib import resources
+
+    from ontodetect.io._yaml import CSafeYamlLoader
+    from ontodetect.ontology._schema import _load_yaml
+
+    if CSafeYamlLoader is None:
+        pytest.skip("PyYAML without libyaml")
+    text = resources.files("ontodetect").joinpath("data", name).read_text("utf-8")
+    slow, slow_lines = _load_yaml(text, name)
+    fast, fast_lines = _load_yaml(text, name, CSafeYamlLoader)
+    assert repr(fast) == repr(slow)
+    assert fast_lines.at == slow_lines.at
+
+
+def test_the_builtin_ontology_is_the_file_parsed_as_any_other():
+    from importlib import resources
+
+    from ontodetect.ontology import builtin_ontology
+
+    text = resources.files("ontodetect").joinpath("data/furniture.yaml").read_text("utf-8")
+    assert builtin_ontology() == parse_ontology(text, "builtin:furniture.yaml")
+
+
+@pytest.mark.parametrize(
+    "text, problem",
+    [
+        ("a: &x [1]\nb: *x\n", "aliases (*x) are not allowed"),
+        ("[1]: 2\n", "a key must be a plain name or number"),
+        ("a: " + "[" * 70 + "]" * 70 + "\n", "nested more than 64 levels deep"),
+    ],
+)
+def test_the_libyaml_reader_refuses_what_the_python_one_does(text, problem):
+    from ontodetect.io._yaml import CSafeYamlLoader, YamlError
+
+    if CSafeYamlLoader is None:
+        pytest.skip("PyYAML without libyaml")
+    loader = CSafeYamlLoader(text)
+    with pytest.raises(YamlError, match=re.escape(problem)):
+        loader.get_single_data()
+    loader.dispose()
 
 
 def test_none_takes_mass_when_nothing_fits():

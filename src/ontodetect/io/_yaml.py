@@ -16,7 +16,19 @@ from typing import Any, ClassVar
 import yaml
 from yaml.events import AliasEvent
 
-__all__ = ["MAX_YAML_DEPTH", "SafeYamlLoader", "YamlError", "describe_yaml_error", "load_yaml"]
+try:
+    from yaml.cyaml import CParser
+except ImportError:  # PyYAML built without libyaml
+    CParser = None
+
+__all__ = [
+    "MAX_YAML_DEPTH",
+    "CSafeYamlLoader",
+    "SafeYamlLoader",
+    "YamlError",
+    "describe_yaml_error",
+    "load_yaml",
+]
 
 #: Deepest nesting of mappings and lists accepted; our files need fewer than ten levels.
 MAX_YAML_DEPTH = 64
@@ -83,6 +95,39 @@ class SafeYamlLoader(yaml.SafeLoader):
 
 
 SafeYamlLoader.add_implicit_resolver("tag:yaml.org,2002:float", _FLOAT, list("-+0123456789."))
+
+
+class _CSafeYamlLoader(SafeYamlLoader):
+    """:class:`SafeYamlLoader` reading its events from libyaml's parser.
+
+    Scanning and parsing in Python are most of the time of a load; libyaml makes the same
+    events (with the same lines), and the nodes are still composed here, with the checks
+    of :class:`SafeYamlLoader` (aliases, nesting, keys). libyaml and PyYAML may still
+    differ on unusual documents: use it on files known to read the same both ways.
+    """
+
+    def __init__(self, stream: Any) -> None:
+        self._events = CParser(stream)
+        yaml.composer.Composer.__init__(self)
+        yaml.constructor.SafeConstructor.__init__(self)
+        yaml.resolver.Resolver.__init__(self)
+        self._depth = 0
+
+    def check_event(self, *choices: Any) -> bool:
+        return self._events.check_event(*choices)
+
+    def peek_event(self) -> Any:
+        return self._events.peek_event()
+
+    def get_event(self) -> Any:
+        return self._events.get_event()
+
+    def dispose(self) -> None:
+        self._events.dispose()
+
+
+#: :class:`SafeYamlLoader` on libyaml's parser, or None when PyYAML was built without it.
+CSafeYamlLoader: type[SafeYamlLoader] | None = None if CParser is None else _CSafeYamlLoader
 
 
 def load_yaml(text: str) -> Any:

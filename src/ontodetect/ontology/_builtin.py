@@ -6,7 +6,7 @@ import functools
 from importlib import resources
 from os import PathLike
 
-from ._schema import Ontology, parse_ontology, read_ontology_file
+from ._schema import Ontology, parse_shipped_ontology, read_ontology_file
 
 __all__ = ["builtin_ontology", "load_ontology"]
 
@@ -15,7 +15,7 @@ __all__ = ["builtin_ontology", "load_ontology"]
 def builtin_ontology() -> Ontology:
     """The shipped furniture ontology: chair, sofa, table (+ stool and bench, not reported)."""
     text = resources.files("ontodetect").joinpath("data/furniture.yaml").read_text("utf-8")
-    return parse_ontology(text, "builtin:furniture.yaml")
+    return parse_shipped_ontology(text, "builtin:furniture.yaml")
 
 
 def load_ontology(*paths: str | PathLike[str], replace: bool = False) -> Ontology:
