@@ -209,6 +209,23 @@ class ClusterDescription:
                     out[j].add(k)
         return [frozenset(x) for x in out]
 
+    @functools.cached_property
+    def _part_values(self) -> dict[str, NDArray[np.float64]]:
+        """:func:`part_values` by feature, filled as the classes ask for them: every class
+        scores the same planes, most of them with the same features."""
+        return {}
+
+    @functools.cached_property
+    def _extra_weights(self) -> tuple[NDArray[np.float64], NDArray[np.bool_], list[bool]]:
+        """What :func:`_extra_log` needs of the planes, the same for every class: their
+        :func:`_plane_weights`, which are large surfaces and which are curved patches."""
+        planes = self.planes
+        surface = np.array(
+            [float(p.tilt) < HORIZONTAL_TILT and float(p.area) >= SURFACE_AREA for p in planes],
+            dtype=bool,
+        )
+        return _plane_weights(planes), surface, [bool(patch_members(p)) for p in planes]
+
     @property
     def rise(self) -> float:
         """Height of the cluster above the top of its highest horizontal plane (m)."""
@@ -321,26 +338,26 @@ def _plane_weights(planes: Sequence[Any]) -> np.ndarray:
     return np.array([min(1.0, float(p.area) / EXTRA_PLANE_AREA) for p in planes])
 
 
-def _extra_log(cls: ObjectClass, planes: Sequence[Any]) -> np.ndarray:
-    """(planes,) log-factor each plane costs when no part of ``cls`` explains it."""
-    out = math.log(cls.extra_plane) * _plane_weights(planes)
+def _extra_log(cls: ObjectClass, desc: ClusterDescription) -> np.ndarray:
+    """(planes,) log-factor each plane of ``desc`` costs when no part of ``cls`` explains it."""
+    weights, surface, patches = desc._extra_weights
+    out = math.log(cls.extra_plane) * weights
     if cls.extra_surface is not None:
-        surface = np.array(
-            [float(p.tilt) < HORIZONTAL_TILT and float(p.area) >= SURFACE_AREA for p in planes],
-            dtype=bool,
-        )
         out[surface] = math.log(cls.extra_surface)
     # A curved patch is its strips again: they cost when nothing explains them, it never.
-    out[[bool(patch_members(p)) for p in planes]] = 0.0
+    out[patches] = 0.0
     return out
 
 
 def _unary(cls: ObjectClass, desc: ClusterDescription) -> np.ndarray:
     """(parts, planes) log-factor of each plane as each part, relations left out."""
     out = np.zeros((len(cls.parts), len(desc.planes)))
+    cache = desc._part_values
     for p, part in enumerate(cls.parts):
         for feature, g in part.constraints.items():
-            values = part_values(desc, feature)
+            values = cache.get(feature)
+            if values is None:
+                values = cache[feature] = part_values(desc, feature)
             if len(values):
                 known = ~np.isnan(values)  # a feature not measured costs nothing
                 out[p, known] += g.log(values[known])
@@ -544,7 +561,7 @@ def score_class(
 
     # Planes no part explains cost ``extra_plane`` each, weighted by their size: a stool
     # is not a chair with a back, but a chair is still a chair with a caster in view.
-    plane_log_extra = _extra_log(cls, desc.planes)
+    plane_log_extra = _extra_log(cls, desc)
     # What a part explains besides its plane: the plane's continuations, and for a part
     # that ``supports``, the upright planes standing under it (``desc.below``).
     held = desc.continued
