@@ -474,6 +474,17 @@ class DetectConfig(_Section):
         "Object proposals: 'vote' (part-seeded clusters, majority of turned passes) or "
         "'recognition' (many candidates scored by the ontology, best disjoint set chosen).",
     )
+    # Recognition's candidates include pieces of objects (a backrest without its seat, a
+    # desk with a chair's legs) that score as well as the whole. A whole piece of furniture
+    # stands apart from what surrounds it but the floor and walls, a piece is cut out of
+    # something: each candidate loses this much log-odds per unit of its cut share
+    # (segment.cut_shares), given back where it meets another chosen candidate.
+    cut_cost: float = _param(
+        40.0,
+        NON_NEGATIVE,
+        "Recognition: log-odds a candidate loses per unit of the share of its graph edges "
+        "that lead to other object points (0: none).",
+    )
 
 
 # -- the whole configuration ---------------------------------------------------------------

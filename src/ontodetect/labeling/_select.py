@@ -67,18 +67,29 @@ def select_candidates(
     pairs: ArrayLike,
     *,
     max_exact: int = MAX_EXACT,
+    bonus: ArrayLike | None = None,
+    eligible: ArrayLike | None = None,
 ) -> tuple[NDArray[np.bool_], str]:
     """The subset of candidates with no conflicting pair and the largest summed gain.
 
     Parameters
     ----------
     gains : (n,) float
-        Each candidate's log-odds against "none" (only positive ones can be chosen).
+        Each candidate's log-odds against "none" (only positive ones can be chosen, or
+        the ``eligible`` ones).
     pairs : (c, 2) int
         Conflicting candidate pairs (:func:`conflicts`).
     max_exact : int
-        Above this many positive candidates, greedy with suppression (best first, its
-        conflicts dropped) instead of the integer program.
+        Above this many eligible candidates, greedy with suppression (best first, its
+        conflicts dropped; ``bonus`` left out) instead of the integer program.
+    bonus : (b, 3) float, optional
+        Rows ``[i, j, value]``: ``value`` is added to the total when candidates ``i`` and
+        ``j`` are both chosen (two objects that touch: what each lost to its cut where it
+        meets the other is given back).
+    eligible : (n,) bool, optional
+        The candidates that may be chosen (default: those with a positive gain); with
+        ``bonus``, one whose gain is negative on its own may still pay with its
+        neighbours.
 
     Returns
     -------
@@ -91,37 +102,57 @@ def select_candidates(
     >>> chosen, how = select_candidates([2.0, 1.5, 1.5], [[0, 1], [0, 2]])
     >>> chosen.tolist(), how
     ([False, True, True], 'milp')
+
+    Two chairs that touch, each cut where it meets the other, against both as one:
+
+    >>> chosen, _ = select_candidates(
+    ...     [1.0, 0.2, 0.2], [[0, 1], [0, 2]], bonus=[[1, 2, 1.0]], eligible=[True] * 3
+    ... )
+    >>> chosen.tolist()
+    [False, True, True]
     """
     gains = np.asarray(gains, dtype=np.float64).reshape(-1)
     pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
-    use = gains > 0
+    use = gains > 0 if eligible is None else np.asarray(eligible, dtype=bool).reshape(-1)
+    extra = np.zeros((0, 3)) if bonus is None else np.asarray(bonus, np.float64).reshape(-1, 3)
+    if len(extra):
+        ij = extra[:, :2].astype(np.int64)
+        extra = extra[use[ij[:, 0]] & use[ij[:, 1]] & (extra[:, 2] > 0)]
     if not use.any():
         return np.zeros(len(gains), dtype=bool), "none"
     keep = use[pairs[:, 0]] & use[pairs[:, 1]] if len(pairs) else np.zeros(0, bool)
     pairs = pairs[keep]
     if int(use.sum()) > max_exact:
-        return _greedy(gains, pairs, use), "greedy"
+        return _greedy(gains, pairs, use & (gains > 0)), "greedy"
     from scipy.optimize import Bounds, LinearConstraint, milp  # lazy: start-up
     from scipy.sparse import coo_matrix  # lazy: start-up
 
     idx = np.flatnonzero(use)
     where = np.full(len(gains), -1)
     where[idx] = np.arange(len(idx))
-    n = len(idx)
+    n, m = len(idx), len(extra)
     constraints = []
     if len(pairs):
         rows = np.repeat(np.arange(len(pairs)), 2)
         cols = where[pairs].reshape(-1)
-        a = coo_matrix((np.ones(len(cols)), (rows, cols)), shape=(len(pairs), n)).tocsr()
+        a = coo_matrix((np.ones(len(cols)), (rows, cols)), shape=(len(pairs), n + m)).tocsr()
         constraints.append(LinearConstraint(a, -np.inf, 1.0))
+    if m:
+        # A pair's bonus y_k counts only when both are chosen: y_k <= x_i, y_k <= x_j.
+        ends = where[extra[:, :2].astype(np.int64)].reshape(-1)
+        rows = np.repeat(np.arange(2 * m), 2)
+        cols = np.column_stack([np.repeat(n + np.arange(m), 2), ends]).reshape(-1)
+        vals = np.tile([1.0, -1.0], 2 * m)
+        b = coo_matrix((vals, (rows, cols)), shape=(2 * m, n + m)).tocsr()
+        constraints.append(LinearConstraint(b, -np.inf, 0.0))
     res = milp(
-        -gains[idx],
+        -np.r_[gains[idx], extra[:, 2]],
         constraints=constraints,
-        integrality=np.ones(n),
+        integrality=np.r_[np.ones(n), np.zeros(m)],
         bounds=Bounds(0.0, 1.0),
     )
     if res.x is None:  # solver failed: the greedy choice still is consistent
-        return _greedy(gains, pairs, use), "greedy"
+        return _greedy(gains, pairs, use & (gains > 0)), "greedy"
     chosen = np.zeros(len(gains), dtype=bool)
-    chosen[idx[np.round(res.x) > 0.5]] = True
+    chosen[idx[np.round(res.x[:n]) > 0.5]] = True
     return chosen, "milp"

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy import sparse
 
 from ..cloud import PointCloud
 from ..config import Config
@@ -26,7 +27,14 @@ from ..labeling import (
 )
 from ..ontology import NONE, ClusterScores, Ontology, score_cluster
 from ..preprocess import Ground
-from ..segment import Cluster, Segmentation, clusters_of_voxels, propose, segment
+from ..segment import (
+    Cluster,
+    Segmentation,
+    clusters_of_voxels,
+    cut_shares,
+    propose,
+    segment,
+)
 from ..segment._measure import describe_clusters
 from ._result import Detection, label_and_detect
 
@@ -59,6 +67,9 @@ class Candidate:
         The chosen candidate it conflicts with (index into the candidates), if any.
     cluster : int or None
         Its cluster in the result's segmentation when chosen.
+    cut : float
+        The share of its voxels' graph edges that lead to other object voxels
+        (:func:`ontodetect.segment.cut_shares`).
     """
 
     source: str
@@ -68,6 +79,7 @@ class Candidate:
     chosen: bool
     beaten_by: int | None
     cluster: int | None = None
+    cut: float = 0.0
 
 
 def candidate_gain(
@@ -143,9 +155,13 @@ def recognize(
     t0 = time.perf_counter()
     best = [candidate_gain(s.probabilities, ontology, d.threshold) for s in all_scores]
     gains = np.array([g for _, g in best], dtype=np.float64)
-    gains *= np.array([c.surface for c in clusters]) ** SIZE_POWER
+    eligible = gains > 0
+    weight = np.array([c.surface for c in clusters]) ** SIZE_POWER
+    cut, contact = cut_shares(prepared, [c.voxels for c in clusters], today.radius)
+    gains = np.where(eligible, gains - d.cut_cost * cut, 0.0) * weight
+    bonus = _touching(contact, eligible, d.cut_cost * weight)
     pairs = conflicts([c.voxels for c in clusters])
-    chosen, _ = select_candidates(gains, pairs)
+    chosen, _ = select_candidates(gains, pairs, bonus=bonus, eligible=eligible)
     keep = np.flatnonzero(chosen)
     # Largest first, as the segmentation numbers its clusters.
     keep = keep[np.argsort([-len(clusters[k].voxels) for k in keep], kind="stable")]
@@ -165,6 +181,7 @@ def recognize(
             k in new_id,
             beaten.get(k),
             new_id.get(k),
+            float(cut[k]),
         )
         for k in range(len(clusters))
     ]
@@ -182,6 +199,21 @@ def recognize(
     choices, found = label_and_detect(cloud, seg, scores, ontology, d)
     timings["label"] = time.perf_counter() - t0
     return seg, scores, choices, found, timings, candidates
+
+
+def _touching(
+    contact: sparse.csr_matrix, eligible: NDArray[np.bool_], cost: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Rows ``[i, j, value]`` (i < j) for eligible candidates that touch: what both lost to
+    their cut where they meet (``cost[i]`` per unit of ``i``'s share), given back when
+    both are chosen."""
+    c = contact.tocoo()
+    ok = eligible[c.row] & eligible[c.col] & (c.row != c.col) & (c.data > 0)
+    i, j = c.row[ok].astype(np.int64), c.col[ok].astype(np.int64)
+    value = c.data[ok] * cost[i]
+    n = len(eligible)
+    key, where = np.unique(np.minimum(i, j) * n + np.maximum(i, j), return_inverse=True)
+    return np.column_stack([key // n, key % n, np.bincount(where, weights=value)])
 
 
 def explain_candidates(candidates: Sequence[Candidate], keep_index: Sequence[int]) -> list[str]:

@@ -12,7 +12,15 @@ between them, an upright box, and flags when it breaks the limits of Table 4.1.
 
 from __future__ import annotations
 
-from ._candidates import GENERATORS, Proposal, Segments, felzenszwalb, oversegment, propose
+from ._candidates import (
+    GENERATORS,
+    Proposal,
+    Segments,
+    cut_shares,
+    felzenszwalb,
+    oversegment,
+    propose,
+)
 from ._cluster import (
     core_neighbors,
     dbscan,
@@ -56,6 +64,7 @@ __all__ = [
     "cluster",
     "clusters_of_voxels",
     "core_neighbors",
+    "cut_shares",
     "dbscan",
     "describe_cluster",
     "describe_clusters",
