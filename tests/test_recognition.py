@@ -304,4 +304,5 @@ def test_recognition_finds_the_tiny_room():
     assert "select" in result.timings
     rows = explain(result)
     assert all("beat" in row for row in rows) and any(row["beat"] for row in rows)
+    assert all(0.0 <= b["cut"] <= 1.0 for row in rows for b in row["beat"])
     assert sum(c.chosen for c in result.candidates) == len(result.segmentation)

@@ -409,6 +409,7 @@ def explain(
                     "label": o.label,
                     "weight": o.gain,
                     "num_voxels": o.num_voxels,
+                    "cut": o.cut,
                 }
                 for o in cands
                 if o.beaten_by == origin[k]

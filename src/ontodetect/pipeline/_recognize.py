@@ -221,9 +221,11 @@ def explain_candidates(candidates: Sequence[Candidate], keep_index: Sequence[int
     lines = []
     for k in keep_index:
         c = candidates[k]
-        lines.append(f"candidate {k} ({c.source}, {c.label}, weight {c.gain:.2f}) beat:")
+        lines.append(
+            f"candidate {k} ({c.source}, {c.label}, weight {c.gain:.2f}, cut {c.cut:.2f}) beat:"
+        )
         for j, o in enumerate(candidates):
             if o.beaten_by == k:
                 why = "no label" if o.label is None else f"{o.label}, weight {o.gain:.2f}"
-                lines.append(f"  {j} ({o.source}, {o.num_voxels} voxels): {why}")
+                lines.append(f"  {j} ({o.source}, {o.num_voxels} voxels, cut {o.cut:.2f}): {why}")
     return lines
