@@ -370,3 +370,35 @@ def test_votes_inside_a_pool_worker():
         pytest.skip("needs fork")
     with multiprocessing.get_context("fork").Pool(1) as pool:
         assert pool.map(_tiny_detections, [0]) == [_tiny_detections(0)]
+
+
+def test_blas_libraries_keep_one_thread_while_detecting_and_theirs_afterwards(monkeypatch):
+    threadpoolctl = pytest.importorskip("threadpoolctl")
+    from ontodetect import _parallel
+
+    def blas_threads():
+        return [
+            i["num_threads"] for i in threadpoolctl.threadpool_info() if i["user_api"] == "blas"
+        ]
+
+    @_parallel.one_blas_thread
+    def inside():
+        return blas_threads()
+
+    with threadpoolctl.threadpool_limits(limits=2, user_api="blas"):
+        before = blas_threads()
+        assert inside() == [1] * len(before)
+        assert blas_threads() == before
+    # the detection itself runs under the limit
+    seen = []
+    from ontodetect.pipeline import _detect
+
+    original = _detect._one_pass
+
+    def spy(*args, **kwargs):
+        seen.append(blas_threads())
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(_detect, "_one_pass", spy)
+    detect(synthesize("tiny", seed=1).cloud, jobs=1)
+    assert seen and all(set(s) <= {1} for s in seen)

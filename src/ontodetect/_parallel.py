@@ -6,11 +6,16 @@ Maps over many units of work (tiles, scans, scenes) go through
 
 from __future__ import annotations
 
+import functools
 import multiprocessing
 import multiprocessing.context
 import os
+from collections.abc import Callable
+from typing import Any, TypeVar
 
-__all__ = ["cpu_count", "fork_context"]
+__all__ = ["cpu_count", "fork_context", "one_blas_thread"]
+
+_F = TypeVar("_F", bound=Callable[..., Any])
 
 
 def fork_context() -> multiprocessing.context.BaseContext | None:
@@ -31,3 +36,25 @@ def cpu_count() -> int:
     if hasattr(os, "sched_getaffinity"):
         return max(1, len(os.sched_getaffinity(0)))
     return os.cpu_count() or 1
+
+
+def one_blas_thread(fn: _F) -> _F:
+    """``fn`` with every BLAS/LAPACK library of the process held to one thread meanwhile
+    (``threadpoolctl``), and the caller's setting back afterwards.
+
+    The detection's linear algebra is on small matrices (a plane's 3 x 3 scatter, a
+    triangle's barycentric transform), thousands of times, while its passes already run in
+    processes of their own, one per CPU. Threads a BLAS library starts for each small call
+    only contend with those processes: on a 2-CPU machine the command line took 0.80 times
+    the CPU time and 0.87 times the wall time with them held to one (docs/benchmarks.md,
+    "BLAS threads"). Forked passes inherit the limit. The results do not depend on it.
+    """
+
+    @functools.wraps(fn)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        from threadpoolctl import threadpool_limits  # lazy: start-up
+
+        with threadpool_limits(limits=1, user_api="blas"):
+            return fn(*args, **kwargs)
+
+    return wrapper  # type: ignore[return-value]

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .._parallel import cpu_count, fork_context
+from .._parallel import cpu_count, fork_context, one_blas_thread
 from .._progress import progress, use_reporter
 from .._rules import SEED
 from ..cloud import DataWarning, PointCloud, as_position, pixel_grid, sensor_position
@@ -69,6 +69,7 @@ class _PassInputs:
     ground: Ground | None = None
 
 
+@one_blas_thread
 def detect(
     cloud: PointCloud,
     *,
