@@ -33,26 +33,35 @@ from test_synth_sensors import box_room
 
 
 # -- the selection ---------------------------------------------------------------------------
-def _brute_force(gains, pairs):
-    n = len(gains)
-    bad = {tuple(p) for p in np.asarray(pairs).tolist()}
-    best = 0.0
-    for r in range(n + 1):
+def _brute_force(gains, pairs, bonus=()):
+    """The best total gain, plus the bonuses of the chosen pairs, over every consistent
+    subset (the empty one included)."""
+    n, best = len(gains), 0.0
+    clash = {tuple(p) for p in np.asarray(pairs).tolist()}
+    for r in range(1, n + 1):
         for subset in itertools.combinations(range(n), r):
-            if any((a, b) in bad for a, b in itertools.combinations(subset, 2)):
+            if any((a, b) in clash for a, b in itertools.combinations(subset, 2)):
                 continue
-            best = max(best, sum(max(gains[k], 0.0) for k in subset if gains[k] > 0))
+            pick = set(subset)
+            extra = sum(v for i, j, v in bonus if int(i) in pick and int(j) in pick)
+            best = max(best, sum(gains[k] for k in subset) + extra)
     return best
+
+
+def _random_candidates(rng, most):
+    """Between 3 and ``most`` candidates: runs of 2 to 14 ids starting below 40."""
+    members = []
+    for _ in range(int(rng.integers(3, most + 1))):
+        lo = int(rng.integers(0, 40))
+        members.append(np.arange(lo, lo + int(rng.integers(2, 15))))
+    return members
 
 
 @pytest.mark.parametrize("seed", range(12))
 def test_the_selection_is_exact_on_small_candidate_sets(seed):
     rng = np.random.default_rng(seed)
-    n = int(rng.integers(3, 11))
-    members = []
-    for _ in range(n):
-        lo = int(rng.integers(0, 40))
-        members.append(np.arange(lo, lo + int(rng.integers(2, 15))))
+    members = _random_candidates(rng, 10)
+    n = len(members)
     gains = rng.normal(0.5, 1.0, n)
     pairs = conflicts(members, share=0.1)
     chosen, how = select_candidates(gains, pairs)
@@ -75,28 +84,11 @@ def test_the_selection_prefers_two_disjoint_candidates_to_their_union():
     assert chosen.tolist() == [True, False, False]
 
 
-def _brute_force_with_bonus(gains, pairs, bonus):
-    """The best total gain plus the bonuses of chosen pairs, over every consistent subset."""
-    n, best = len(gains), 0.0
-    clash = {tuple(p) for p in np.asarray(pairs).tolist()}
-    for r in range(1, n + 1):
-        for subset in itertools.combinations(range(n), r):
-            if any((a, b) in clash for a, b in itertools.combinations(subset, 2)):
-                continue
-            pick = set(subset)
-            extra = sum(v for i, j, v in bonus if int(i) in pick and int(j) in pick)
-            best = max(best, sum(gains[k] for k in subset) + extra)
-    return best
-
-
 @pytest.mark.parametrize("seed", range(12))
 def test_the_selection_with_pair_bonuses_is_exact(seed):
     rng = np.random.default_rng(100 + seed)
-    n = int(rng.integers(3, 10))
-    members = []
-    for _ in range(n):
-        lo = int(rng.integers(0, 40))
-        members.append(np.arange(lo, lo + int(rng.integers(2, 15))))
+    members = _random_candidates(rng, 9)
+    n = len(members)
     gains = rng.normal(0.0, 1.0, n)
     pairs = conflicts(members, share=0.1)
     clash = {tuple(p) for p in pairs.tolist()}
@@ -112,7 +104,7 @@ def test_the_selection_with_pair_bonuses_is_exact(seed):
     assert not any(chosen[a] and chosen[b] for a, b in pairs)
     pick = set(np.flatnonzero(chosen).tolist())
     total = gains[chosen].sum() + sum(v for i, j, v in bonus if i in pick and j in pick)
-    assert total == pytest.approx(_brute_force_with_bonus(gains, pairs, bonus), abs=1e-9)
+    assert total == pytest.approx(_brute_force(gains, pairs, bonus), abs=1e-9)
 
 
 def test_touching_candidates_get_back_what_they_lost_where_they_meet():
