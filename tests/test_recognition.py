@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
-import types
 
 import numpy as np
 import pytest
@@ -24,6 +23,7 @@ from ontodetect.segment import (
     felzenszwalb,
     oversegment,
     propose,
+    radius_graph,
     segment,
 )
 from ontodetect.synth import synthesize
@@ -125,17 +125,18 @@ def test_cut_shares_of_a_whole_object_and_of_its_pieces():
     # cut from each other, and the contact says how much of each half meets the other.
     g = np.mgrid[0:6, 0:4, 0:4].reshape(3, -1).T * 0.02
     centers = np.vstack([g, g + [1.0, 0.0, 0.0]])
-    scene = types.SimpleNamespace(object_mask=np.ones(len(centers), bool), centers=centers)
+    objects = np.arange(len(centers))
     box = np.arange(len(g))
     left, right = box[g[:, 0] < 0.05], box[g[:, 0] > 0.05]
-    cut, contact = cut_shares(scene, [box, box + len(g), left, right], 0.021)
+    graph = radius_graph(centers, 0.021)
+    cut, contact = cut_shares(objects, graph, [box, box + len(g), left, right])
     assert cut[0] == 0.0 and cut[1] == 0.0
     assert 0.0 < cut[2] < 0.5 and cut[3] == pytest.approx(cut[2])
     assert contact[2, 3] == pytest.approx(cut[2]) and contact[3, 2] == pytest.approx(cut[3])
     assert contact[0, 1] == 0.0  # 1 m apart: no edge between them
     # structure (not an object voxel) is not in the graph: resting on it cuts nothing
-    scene.object_mask[left] = False
-    cut, _ = cut_shares(scene, [right], 0.021)
+    objects = np.setdiff1d(objects, left)
+    cut, _ = cut_shares(objects, radius_graph(centers[objects], 0.021), [right])
     assert cut[0] == 0.0
 
 

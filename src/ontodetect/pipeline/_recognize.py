@@ -133,7 +133,7 @@ def recognize(
     t0 = time.perf_counter()
     today = segment(cloud, config, seed=seed, ground=ground, ontology=ontology)
     prepared = today.prepared
-    voxel_sets, sources, _ = propose(prepared, today)
+    voxel_sets, sources, proposal = propose(prepared, today)
     clusters = clusters_of_voxels(prepared, voxel_sets, config, seed=seed, radius=today.radius)
     everything = Segmentation(
         clusters,
@@ -157,7 +157,7 @@ def recognize(
     gains = np.array([g for _, g in best], dtype=np.float64)
     eligible = gains > 0
     weight = np.array([c.surface for c in clusters]) ** SIZE_POWER
-    cut, contact = cut_shares(prepared, [c.voxels for c in clusters], today.radius)
+    cut, contact = cut_shares(proposal.objects, proposal.graph, [c.voxels for c in clusters])
     gains = np.where(eligible, gains - d.cut_cost * cut, 0.0) * weight
     bonus = _touching(contact, eligible, d.cut_cost * weight)
     pairs = conflicts([c.voxels for c in clusters])

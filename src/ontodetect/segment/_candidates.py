@@ -161,10 +161,12 @@ def oversegment(
     *,
     scale: float = FH_SCALE,
     min_size: int = MIN_SEGMENT,
+    graph: sparse.csr_matrix | None = None,
 ) -> Segments:
     """Small surface segments of voxels (centres ``(m, 3)``): Felzenszwalb–Huttenlocher on
-    the radius graph, edges weighted by the normals' angle and the colour difference; each
-    segment's centroid, normal and neighbours measured once."""
+    the radius graph (``graph`` when it is already made), edges weighted by the normals'
+    angle and the colour difference; each segment's centroid, normal and neighbours
+    measured once."""
     m = len(centers)
     if m == 0:
         z = np.zeros((0, 3))
@@ -176,7 +178,8 @@ def oversegment(
             np.zeros((0, 2), np.int64),
             np.zeros(0),
         )
-    graph = radius_graph(centers, radius) if m > 1 else sparse.csr_matrix((m, m))
+    if graph is None:
+        graph = radius_graph(centers, radius) if m > 1 else sparse.csr_matrix((m, m))
     normals, _ = graph_normals(centers, graph) if m > 1 else (np.tile([0.0, 0, 1], (m, 1)), None)
     g = sparse.triu(graph, k=1).tocoo()
     i, j = g.row.astype(np.int64), g.col.astype(np.int64)
@@ -226,6 +229,11 @@ class Proposal:
         Longest side a candidate may have (m), ``cluster.length[1]``.
     min_voxels : int
         Fewest voxels of a candidate (``cluster.min_surface``).
+    members : list of (k,) int
+        Scene voxels of each segment.
+    graph : (m, m) sparse, optional
+        The object voxels' graph at the clustering radius (rows index ``objects``), made
+        once for the over-segmentation, the generators and :func:`cut_shares`.
     """
 
     prepared: PreparedScene
@@ -236,6 +244,7 @@ class Proposal:
     max_length: float
     min_voxels: int
     members: list[NDArray[np.int64]] = field(default_factory=list)
+    graph: sparse.csr_matrix | None = None
 
     def voxels_of(self, segment_ids: NDArray[np.int64]) -> NDArray[np.int64]:
         """Scene voxels of the given segments."""
@@ -330,7 +339,7 @@ def _density(p: Proposal) -> list[NDArray[np.int64]]:
     for f in DENSITY_RADII:
         if len(centers) < 2:
             break
-        labels = euclidean_clusters(centers, f * p.radius)
+        labels = euclidean_clusters(centers, f * p.radius, graph=p.graph if f == 1 else None)
         for c in range(int(labels.max()) + 1):
             out.append(p.objects[labels == c])
     return out
@@ -356,8 +365,13 @@ def propose(
     objects = np.flatnonzero(prepared.object_mask).astype(np.int64)
     radius = seg.radius
     centers = prepared.centers[objects]
+    m = len(objects)
+    graph = radius_graph(centers, radius) if m > 1 else sparse.csr_matrix((m, m))
     segments = oversegment(
-        centers, None if prepared.colors is None else prepared.colors[objects], radius
+        centers,
+        None if prepared.colors is None else prepared.colors[objects],
+        radius,
+        graph=graph,
     )
     order = np.argsort(segments.labels, kind="stable")
     bounds = np.r_[0, np.cumsum(segments.counts)]
@@ -371,6 +385,7 @@ def propose(
         float(cc.length[1]),
         max(1, int(np.ceil(cc.min_surface / prepared.spacing**2))),
         members,
+        graph,
     )
     seen: set[bytes] = set()
     out, sources = [], []
@@ -391,24 +406,25 @@ def propose(
 
 
 def cut_shares(
-    prepared: PreparedScene, voxel_sets: list[NDArray[np.int64]], radius: float
+    objects: NDArray[np.int64], graph: sparse.csr_matrix, voxel_sets: list[NDArray[np.int64]]
 ) -> tuple[NDArray[np.float64], sparse.csr_matrix]:
     """How much of each candidate is cut out of something bigger.
 
-    On the graph joining the scene's object voxels closer than ``radius`` (the
-    clustering's own), a candidate's cut share is the share of its voxels' edges that lead
-    to object voxels outside it. A piece of furniture stands apart from what is around it
-    but for the floor and the walls it rests on (structure, not in the graph): a whole
-    chair has a share near 0, a chair's backrest without its seat, or a desk with a chair's
-    legs, a large one.
+    On the graph joining the scene's object voxels closer than the clustering radius
+    (:attr:`Proposal.graph`), a candidate's cut share is the share of its voxels' edges
+    that lead to object voxels outside it. A piece of furniture stands apart from what is
+    around it but for the floor and the walls it rests on (structure, not in the graph): a
+    whole chair has a share near 0, a chair's backrest without its seat, or a desk with a
+    chair's legs, a large one.
 
     Parameters
     ----------
-    prepared : PreparedScene
+    objects : (m,) int
+        The graph's nodes: sorted scene voxels (:attr:`Proposal.objects`).
+    graph : (m, m) sparse
+        Their graph (:attr:`Proposal.graph`).
     voxel_sets : list of (k,) int
-        Each candidate's scene voxels.
-    radius : float
-        Edge length of the graph (m).
+        Each candidate's scene voxels (those not in ``objects`` are left out).
 
     Returns
     -------
@@ -421,25 +437,24 @@ def cut_shares(
     Examples
     --------
     >>> import numpy as np
-    >>> from types import SimpleNamespace
     >>> line = np.column_stack([np.arange(6) * 0.02, np.zeros(6), np.zeros(6)])
-    >>> scene = SimpleNamespace(object_mask=np.ones(6, bool), centers=line)
-    >>> cut, contact = cut_shares(scene, [np.arange(6), np.arange(3), np.arange(3, 6)], 0.025)
+    >>> graph = radius_graph(line, 0.025)
+    >>> sets = [np.arange(6), np.arange(3), np.arange(3, 6)]
+    >>> cut, contact = cut_shares(np.arange(6), graph, sets)
     >>> cut.round(2).tolist(), round(float(contact[1, 2]), 2)
     ([0.0, 0.2, 0.2], 0.2)
     """
-    objects = np.flatnonzero(prepared.object_mask)
-    where = np.full(len(prepared.object_mask), -1, dtype=np.int64)
-    where[objects] = np.arange(len(objects))
-    graph = radius_graph(prepared.centers[objects], radius).tocsr()
+    objects = np.asarray(objects, dtype=np.int64)
+    graph = sparse.csr_matrix(graph)
     n, m = len(voxel_sets), len(objects)
     cut = np.zeros(n)
     edges = np.ones(n)
     member_rows, member_cols, out_rows, out_cols = [], [], [], []
     inside = np.zeros(m, dtype=bool)
     for k, vox in enumerate(voxel_sets):
-        idx = where[np.asarray(vox, dtype=np.int64)]
-        idx = idx[idx >= 0]
+        vox = np.asarray(vox, dtype=np.int64)
+        idx = np.minimum(np.searchsorted(objects, vox), max(m - 1, 0))
+        idx = idx[objects[idx] == vox] if m else idx[:0]
         if not len(idx):
             continue
         inside[idx] = True
