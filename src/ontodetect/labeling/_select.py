@@ -122,8 +122,9 @@ def select_candidates(
         return np.zeros(len(gains), dtype=bool), "none"
     keep = use[pairs[:, 0]] & use[pairs[:, 1]] if len(pairs) else np.zeros(0, bool)
     pairs = pairs[keep]
+    positive = use & (gains > 0)  # what the greedy choice, which knows no bonus, may take
     if int(use.sum()) > max_exact:
-        return _greedy(gains, pairs, use & (gains > 0)), "greedy"
+        return _greedy(gains, pairs, positive), "greedy"
     from scipy.optimize import Bounds, LinearConstraint, milp  # lazy: start-up
     from scipy.sparse import coo_matrix  # lazy: start-up
 
@@ -152,7 +153,7 @@ def select_candidates(
         bounds=Bounds(0.0, 1.0),
     )
     if res.x is None:  # solver failed: the greedy choice still is consistent
-        return _greedy(gains, pairs, use & (gains > 0)), "greedy"
+        return _greedy(gains, pairs, positive), "greedy"
     chosen = np.zeros(len(gains), dtype=bool)
     chosen[idx[np.round(res.x[:n]) > 0.5]] = True
     return chosen, "milp"
