@@ -178,6 +178,50 @@ def test_seen_below_finds_a_seat_inside_the_u_of_an_armchair_and_nothing_in_a_bo
     assert max(s for x, s in tops.items() if x < 2) > 0.25  # the seat shows inside the U
 
 
+def test_covered_finds_a_top_over_a_shelf_and_nothing_over_an_armchairs_seat():
+    """A desk's top covers the shelf under it; an armchair's arms stand beside its seat,
+    not over it. Tilted planes are not measured; nothing higher, nothing covered."""
+    from ontodetect.segment import covered_above, segment
+    from test_segmentation import rect, slab
+
+    rng = np.random.default_rng(1)
+    floor = rect(rng, (0, 0, 0), (5, 0, 0), (0, 3, 0), 0.03)
+    x0, y0 = 0.5, 0.5  # the armchair of the seen_below test: seat 0.42, arms 0.64
+    armchair = np.vstack(
+        [
+            rect(rng, (x0 + 0.2, y0, 0.42), (0.5, 0, 0), (0, 0.65, 0)),
+            rect(rng, (x0 + 0.2, y0, 0.0), (0.5, 0, 0), (0, 0, 0.42)),
+            slab(rng, (x0, y0, 0.0), (x0 + 0.2, y0 + 0.85, 0.64)),
+            slab(rng, (x0 + 0.7, y0, 0.0), (x0 + 0.9, y0 + 0.85, 0.64)),
+            slab(rng, (x0 + 0.2, y0 + 0.65, 0.0), (x0 + 0.7, y0 + 0.85, 0.64)),
+        ]
+    )
+    x1, y1 = 2.6, 0.6  # a desk 1.2 x 0.6: a top at 0.72 on two side panels, a shelf at 0.45
+    desk = np.vstack(
+        [
+            rect(rng, (x1, y1, 0.72), (1.2, 0, 0), (0, 0.6, 0)),
+            rect(rng, (x1, y1, 0.0), (0, 0.6, 0), (0, 0, 0.72)),
+            rect(rng, (x1 + 1.2, y1, 0.0), (0, 0.6, 0), (0, 0, 0.72)),
+            rect(rng, (x1, y1, 0.45), (1.2, 0, 0), (0, 0.6, 0)),
+        ]
+    )
+    on_floor = ~np.all((floor[:, :2] > (x0, y0)) & (floor[:, :2] < (x0 + 0.9, y0 + 0.85)), axis=1)
+    seg = segment(np.vstack([floor[on_floor], armchair, desk]), seed=0)
+    values = covered_above(seg)
+    level = {}
+    for c, v in zip(seg, values, strict=True):
+        assert len(v) == len(c.planes)
+        for plane, share in zip(c.planes, v, strict=True):
+            if plane.tilt > 10:
+                assert math.isnan(share)
+            elif plane.area > 0.15:
+                level[(round(float(plane.centroid[0])), float(plane.height) > 0.6)] = share
+    assert level[(3, False)] > 0.9  # the desk's shelf, under its top
+    assert level[(3, True)] == 0.0  # nothing over the desk's top
+    assert level[(1, False)] < 0.15  # the armchair's arms stand beside its seat
+    assert level[(1, True)] == 0.0  # nor does anything stand over the arms
+
+
 def _rows(a, b):
     return np.arange(a, b, dtype=np.int64)
 

@@ -322,6 +322,10 @@ for _feature in (
     Feature("seen_below", "part", "Pr",
             "share of a horizontal plane's outline over which a lower horizontal plane of "
             "the cluster was seen (0..1)", 0.03, scene=True),
+    # Nothing of a chair stands over its seat; a desk's top covers the pedestal under it.
+    Feature("covered", "part", "Pr",
+            "share of a horizontal plane's outline over which a higher horizontal plane of "
+            "the cluster was seen (0..1)", 0.03, scene=True),
     Feature("angle", "relation", "Pr", "angle between the normals, folded to [0, 90] degrees",
             2.0, relation=_relation_attribute("angle", 0.0)),
     Feature("distance", "relation", "Pr",

@@ -31,6 +31,7 @@ from ._cluster import (
     relabel,
 )
 from ._measure import (
+    covered_above,
     describe_cluster,
     describe_clusters,
     hidden_heights,
@@ -64,6 +65,7 @@ __all__ = [
     "cluster",
     "clusters_of_voxels",
     "core_neighbors",
+    "covered_above",
     "cut_shares",
     "dbscan",
     "describe_cluster",

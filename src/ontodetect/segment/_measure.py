@@ -31,6 +31,7 @@ __all__ = [
     "SELF_SHADOW_DISTANCE",
     "SHELTER_AREA",
     "SHELTER_GAP",
+    "covered_above",
     "describe_cluster",
     "describe_clusters",
     "hidden_heights",
@@ -47,6 +48,7 @@ def describe_cluster(
     hidden_below: float = -math.inf,
     open_below: Sequence[float] | None = None,
     seen_below: Sequence[float] | None = None,
+    covered: Sequence[float] | None = None,
 ) -> ClusterDescription:
     """What the ontology scoring needs to know about a cluster (``shelter``: see
     :func:`shelter_heights`; ``ceiling``: the top of the search volume;
@@ -63,7 +65,11 @@ def describe_cluster(
         ceiling=ceiling,
         hidden_below=hidden_below,
         open_below=open_below,
-        scene={} if seen_below is None else {"seen_below": seen_below},
+        scene={
+            name: values
+            for name, values in (("seen_below", seen_below), ("covered", covered))
+            if values is not None
+        },
     )
 
 
@@ -90,8 +96,10 @@ def describe_clusters(
     # From one view the floor under a top is hidden by the top itself: not measured there.
     below = open_below(seg) if viewpoint is None else [None] * len(seg)
     return [
-        describe_cluster(c, float(h), ceiling, float(b), o, s)
-        for c, h, b, o, s in zip(seg, shelter_heights(seg), hidden, below, seen_below(seg))
+        describe_cluster(c, float(h), ceiling, float(b), o, s, a)
+        for c, h, b, o, s, a in zip(
+            seg, shelter_heights(seg), hidden, below, seen_below(seg), covered_above(seg)
+        )
     ]
 
 
@@ -180,6 +188,37 @@ def _cells_inside(xy: NDArray[np.float64]) -> NDArray[np.int64]:
     return np.union1d(_pack(inside), own)
 
 
+def _outline_shares(seg: Segmentation, sign: int) -> list[list[float]]:
+    """Per cluster and plane, the share of a horizontal plane's outline over which another
+    horizontal plane of the cluster was seen, lower (``sign`` -1) or higher (+1) by at
+    least ``SEEN_BELOW_DROP``; NaN for tilted planes."""
+    out: list[list[float]] = []
+    for c in seg:
+        centers = np.asarray(c.centers)
+        planes = c.scored_planes
+        flat = [float(p.tilt) <= HORIZONTAL_TILT for p in planes]
+        values = []
+        for i, plane in enumerate(planes):
+            if not flat[i]:
+                values.append(math.nan)
+                continue
+            z = float(plane.centroid[2])
+            others = [
+                q
+                for k, q in enumerate(planes)
+                if flat[k] and sign * (float(q.centroid[2]) - z) >= SEEN_BELOW_DROP
+            ]
+            if not others:
+                values.append(0.0)
+                continue
+            outline = _cells_inside(centers[plane.inliers, :2])
+            cells = [_cell_keys(centers[q.inliers, :2], SEEN_BELOW_CELL) for q in others]
+            seen = np.unique(np.concatenate(cells))
+            values.append(float(np.isin(outline, seen).mean()))
+        out.append(values)
+    return out
+
+
 def seen_below(seg: Segmentation) -> list[list[float]]:
     """Per cluster and plane, the share of a horizontal plane's outline (the convex hull of
     its points, on a ``SEEN_BELOW_CELL`` grid) over which a lower horizontal plane of the
@@ -191,31 +230,18 @@ def seen_below(seg: Segmentation) -> list[list[float]]:
     it, lower. A horizontal plane lies under the top when its centroid is at least
     ``SEEN_BELOW_DROP`` lower.
     """
-    out: list[list[float]] = []
-    for c in seg:
-        centers = np.asarray(c.centers)
-        planes = c.scored_planes
-        flat = [float(p.tilt) <= HORIZONTAL_TILT for p in planes]
-        values = []
-        for i, plane in enumerate(planes):
-            if not flat[i]:
-                values.append(math.nan)
-                continue
-            lower = [
-                q
-                for k, q in enumerate(planes)
-                if flat[k] and float(q.centroid[2]) <= float(plane.centroid[2]) - SEEN_BELOW_DROP
-            ]
-            if not lower:
-                values.append(0.0)
-                continue
-            outline = _cells_inside(centers[plane.inliers, :2])
-            under = np.unique(
-                np.concatenate([_cell_keys(centers[q.inliers, :2], SEEN_BELOW_CELL) for q in lower])
-            )
-            values.append(float(np.isin(outline, under).mean()))
-        out.append(values)
-    return out
+    return _outline_shares(seg, -1)
+
+
+def covered_above(seg: Segmentation) -> list[list[float]]:
+    """Per cluster and plane, the share of a horizontal plane's outline over which a higher
+    horizontal plane of the same cluster was seen (0..1, at least ``SEEN_BELOW_DROP``
+    higher); NaN for tilted planes.
+
+    Nothing of a chair stands over its seat, where someone sits: its arms stand beside
+    the seat and its back behind it. A desk's pedestal or a shelf under a top is covered.
+    """
+    return _outline_shares(seg, 1)
 
 
 #: What a cluster hides behind it must lie in its shadow for at least this far (m),
