@@ -141,16 +141,11 @@ def test_open_below_sees_the_floor_under_a_table_and_not_under_a_box(rng):
     assert all(d.open_below is None for d in describe_clusters(seg, viewpoint=(0, 0, 1.5)))
 
 
-def test_seen_below_finds_a_seat_inside_the_u_of_an_armchair_and_nothing_in_a_box():
-    """Inside the U of an armchair's arms and back top a lower seat is seen; under a closed
-    box's top nothing is. Tilted planes are not measured."""
-    from ontodetect.segment import seen_below, segment
+def _armchair(rng, x0, y0):
+    """An armchair 0.9 x 0.85 at (x0, y0): seat 0.42, arms and back top 0.64."""
     from test_segmentation import rect, slab
 
-    rng = np.random.default_rng(1)  # a scan in which MSAC finds the seat among 8 planes
-    floor = rect(rng, (0, 0, 0), (5, 0, 0), (0, 3, 0), 0.03)
-    x0, y0 = 0.5, 0.5  # an armchair 0.9 x 0.85: seat 0.42, arms and back top 0.64
-    armchair = np.vstack(
+    return np.vstack(
         [
             rect(rng, (x0 + 0.2, y0, 0.42), (0.5, 0, 0), (0, 0.65, 0)),  # seat
             rect(rng, (x0 + 0.2, y0, 0.0), (0.5, 0, 0), (0, 0, 0.42)),  # its front
@@ -159,21 +154,42 @@ def test_seen_below_finds_a_seat_inside_the_u_of_an_armchair_and_nothing_in_a_bo
             slab(rng, (x0 + 0.2, y0 + 0.65, 0.0), (x0 + 0.7, y0 + 0.85, 0.64)),  # back
         ]
     )
+
+
+def _level_shares(seg, values):
+    """(plane, share) for every level plane of every cluster; tilted planes must be NaN."""
+    out = []
+    for c, v in zip(seg, values, strict=True):
+        assert len(v) == len(c.planes)
+        for plane, share in zip(c.planes, v, strict=True):
+            if plane.tilt > 10:
+                assert math.isnan(share)
+            else:
+                out.append((plane, share))
+    return out
+
+
+def test_seen_below_finds_a_seat_inside_the_u_of_an_armchair_and_nothing_in_a_box():
+    """Inside the U of an armchair's arms and back top a lower seat is seen; under a closed
+    box's top nothing is. Tilted planes are not measured."""
+    from ontodetect.segment import seen_below, segment
+    from test_segmentation import rect, slab
+
+    rng = np.random.default_rng(1)  # a scan in which MSAC finds the seat among 8 planes
+    floor = rect(rng, (0, 0, 0), (5, 0, 0), (0, 3, 0), 0.03)
+    x0, y0 = 0.5, 0.5
+    armchair = _armchair(rng, x0, y0)
     box = slab(rng, (2.6, 0.6, 0.0), (3.6, 1.2, 0.64))
     on_floor = ~(
         np.all((floor[:, :2] > (x0, y0)) & (floor[:, :2] < (x0 + 0.9, y0 + 0.85)), axis=1)
         | np.all((floor[:, :2] > (2.6, 0.6)) & (floor[:, :2] < (3.6, 1.2)), axis=1)
     )
     seg = segment(np.vstack([floor[on_floor], armchair, box]), seed=0)
-    values = seen_below(seg)
-    tops = {}
-    for c, v in zip(seg, values, strict=True):
-        assert len(v) == len(c.planes)
-        for plane, share in zip(c.planes, v, strict=True):
-            if plane.tilt > 10:
-                assert math.isnan(share)
-            elif plane.height > 0.55 and plane.area > 0.2:
-                tops[round(float(plane.centroid[0]))] = share
+    tops = {
+        round(float(plane.centroid[0])): share
+        for plane, share in _level_shares(seg, seen_below(seg))
+        if plane.height > 0.55 and plane.area > 0.2
+    }
     assert tops[3] < 0.05  # the box's top hides what is under it
     assert max(s for x, s in tops.items() if x < 2) > 0.25  # the seat shows inside the U
 
@@ -182,20 +198,12 @@ def test_covered_finds_a_top_over_a_shelf_and_nothing_over_an_armchairs_seat():
     """A desk's top covers the shelf under it; an armchair's arms stand beside its seat,
     not over it. Tilted planes are not measured; nothing higher, nothing covered."""
     from ontodetect.segment import covered_above, segment
-    from test_segmentation import rect, slab
+    from test_segmentation import rect
 
     rng = np.random.default_rng(1)
     floor = rect(rng, (0, 0, 0), (5, 0, 0), (0, 3, 0), 0.03)
-    x0, y0 = 0.5, 0.5  # the armchair of the seen_below test: seat 0.42, arms 0.64
-    armchair = np.vstack(
-        [
-            rect(rng, (x0 + 0.2, y0, 0.42), (0.5, 0, 0), (0, 0.65, 0)),
-            rect(rng, (x0 + 0.2, y0, 0.0), (0.5, 0, 0), (0, 0, 0.42)),
-            slab(rng, (x0, y0, 0.0), (x0 + 0.2, y0 + 0.85, 0.64)),
-            slab(rng, (x0 + 0.7, y0, 0.0), (x0 + 0.9, y0 + 0.85, 0.64)),
-            slab(rng, (x0 + 0.2, y0 + 0.65, 0.0), (x0 + 0.7, y0 + 0.85, 0.64)),
-        ]
-    )
+    x0, y0 = 0.5, 0.5
+    armchair = _armchair(rng, x0, y0)
     x1, y1 = 2.6, 0.6  # a desk 1.2 x 0.6: a top at 0.72 on two side panels, a shelf at 0.45
     desk = np.vstack(
         [
@@ -207,15 +215,11 @@ def test_covered_finds_a_top_over_a_shelf_and_nothing_over_an_armchairs_seat():
     )
     on_floor = ~np.all((floor[:, :2] > (x0, y0)) & (floor[:, :2] < (x0 + 0.9, y0 + 0.85)), axis=1)
     seg = segment(np.vstack([floor[on_floor], armchair, desk]), seed=0)
-    values = covered_above(seg)
-    level = {}
-    for c, v in zip(seg, values, strict=True):
-        assert len(v) == len(c.planes)
-        for plane, share in zip(c.planes, v, strict=True):
-            if plane.tilt > 10:
-                assert math.isnan(share)
-            elif plane.area > 0.15:
-                level[(round(float(plane.centroid[0])), float(plane.height) > 0.6)] = share
+    level = {
+        (round(float(plane.centroid[0])), float(plane.height) > 0.6): share
+        for plane, share in _level_shares(seg, covered_above(seg))
+        if plane.area > 0.15
+    }
     assert level[(3, False)] > 0.9  # the desk's shelf, under its top
     assert level[(3, True)] == 0.0  # nothing over the desk's top
     assert level[(1, False)] < 0.15  # the armchair's arms stand beside its seat
