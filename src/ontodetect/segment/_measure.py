@@ -95,11 +95,10 @@ def describe_clusters(
         )
     # From one view the floor under a top is hidden by the top itself: not measured there.
     below = open_below(seg) if viewpoint is None else [None] * len(seg)
+    lower, higher = _outline_shares(seg, (-1, 1))  # seen_below, covered_above
     return [
         describe_cluster(c, float(h), ceiling, float(b), o, s, a)
-        for c, h, b, o, s, a in zip(
-            seg, shelter_heights(seg), hidden, below, seen_below(seg), covered_above(seg)
-        )
+        for c, h, b, o, s, a in zip(seg, shelter_heights(seg), hidden, below, lower, higher)
     ]
 
 
@@ -188,34 +187,38 @@ def _cells_inside(xy: NDArray[np.float64]) -> NDArray[np.int64]:
     return np.union1d(_pack(inside), own)
 
 
-def _outline_shares(seg: Segmentation, sign: int) -> list[list[float]]:
-    """Per cluster and plane, the share of a horizontal plane's outline over which another
-    horizontal plane of the cluster was seen, lower (``sign`` -1) or higher (+1) by at
-    least ``SEEN_BELOW_DROP``; NaN for tilted planes."""
-    out: list[list[float]] = []
+def _outline_shares(seg: Segmentation, signs: Sequence[int]) -> list[list[list[float]]]:
+    """For each ``sign`` in ``signs``, per cluster and plane, the share of a horizontal
+    plane's outline over which another horizontal plane of the cluster was seen, lower
+    (``sign`` -1) or higher (+1) by at least ``SEEN_BELOW_DROP``; NaN for tilted planes.
+    Each plane's outline is worked out once for all signs."""
+    out: list[list[list[float]]] = [[] for _ in signs]
     for c in seg:
         centers = np.asarray(c.centers)
         planes = c.scored_planes
         flat = [float(p.tilt) <= HORIZONTAL_TILT for p in planes]
-        values = []
+        values: list[list[float]] = [[] for _ in signs]
         for i, plane in enumerate(planes):
-            if not flat[i]:
-                values.append(math.nan)
-                continue
+            outline = None
             z = float(plane.centroid[2])
-            others = [
-                q
-                for k, q in enumerate(planes)
-                if flat[k] and sign * (float(q.centroid[2]) - z) >= SEEN_BELOW_DROP
-            ]
-            if not others:
-                values.append(0.0)
-                continue
-            outline = _cells_inside(centers[plane.inliers, :2])
-            cells = [_cell_keys(centers[q.inliers, :2], SEEN_BELOW_CELL) for q in others]
-            seen = np.unique(np.concatenate(cells))
-            values.append(float(np.isin(outline, seen).mean()))
-        out.append(values)
+            for sign, row in zip(signs, values, strict=True):
+                if not flat[i]:
+                    row.append(math.nan)
+                    continue
+                others = [
+                    q
+                    for k, q in enumerate(planes)
+                    if flat[k] and sign * (float(q.centroid[2]) - z) >= SEEN_BELOW_DROP
+                ]
+                if not others:
+                    row.append(0.0)
+                    continue
+                if outline is None:
+                    outline = _cells_inside(centers[plane.inliers, :2])
+                cells = [_cell_keys(centers[q.inliers, :2], SEEN_BELOW_CELL) for q in others]
+                row.append(float(np.isin(outline, np.unique(np.concatenate(cells))).mean()))
+        for rows, row in zip(out, values, strict=True):
+            rows.append(row)
     return out
 
 
@@ -230,7 +233,7 @@ def seen_below(seg: Segmentation) -> list[list[float]]:
     it, lower. A horizontal plane lies under the top when its centroid is at least
     ``SEEN_BELOW_DROP`` lower.
     """
-    return _outline_shares(seg, -1)
+    return _outline_shares(seg, (-1,))[0]
 
 
 def covered_above(seg: Segmentation) -> list[list[float]]:
@@ -241,7 +244,7 @@ def covered_above(seg: Segmentation) -> list[list[float]]:
     Nothing of a chair stands over its seat, where someone sits: its arms stand beside
     the seat and its back behind it. A desk's pedestal or a shelf under a top is covered.
     """
-    return _outline_shares(seg, 1)
+    return _outline_shares(seg, (1,))[0]
 
 
 #: What a cluster hides behind it must lie in its shadow for at least this far (m),
