@@ -92,10 +92,11 @@ SHELTER_TOLERANCE = 0.05
 #: constraint is less than this above the cluster's lowest point (m) ...
 HIDDEN_MARGIN = 0.1
 #: ... or, beside a neighbour's surface (``shelter``), less than this: what shows of a
-#: chair pushed under a desk may begin at its seat's rear edge, and a seat anywhere in EN
-#: 1335-1's adjustable range (420-530 mm) must count; its lowest, 0.42 m, lies 0.13 m
-#: under the 0.55 m centre of Table 4.1's seating plane range (35-75 cm).
-SHELTERED_MARGIN = 0.15
+#: chair pushed under a table may begin at its seat's rear edge, and a seat anywhere in
+#: Table 4.1's seating plane range (35-75 cm) must count, a dining or stacking chair's as
+#: well as an office chair's (EN 1335-1: 420-530 mm); its lowest, 0.35 m, lies 0.20 m under
+#: the range's 0.55 m centre.
+SHELTERED_MARGIN = 0.2
 
 
 @dataclass(frozen=True)
