@@ -115,9 +115,10 @@ def select_candidates(
     pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
     use = gains > 0 if eligible is None else np.asarray(eligible, dtype=bool).reshape(-1)
     extra = np.zeros((0, 3)) if bonus is None else np.asarray(bonus, np.float64).reshape(-1, 3)
+    ij = extra[:, :2].astype(np.int64)
     if len(extra):
-        ij = extra[:, :2].astype(np.int64)
-        extra = extra[use[ij[:, 0]] & use[ij[:, 1]] & (extra[:, 2] > 0)]
+        keep_bonus = use[ij[:, 0]] & use[ij[:, 1]] & (extra[:, 2] > 0)
+        extra, ij = extra[keep_bonus], ij[keep_bonus]
     if not use.any():
         return np.zeros(len(gains), dtype=bool), "none"
     keep = use[pairs[:, 0]] & use[pairs[:, 1]] if len(pairs) else np.zeros(0, bool)
@@ -140,7 +141,7 @@ def select_candidates(
         constraints.append(LinearConstraint(a, -np.inf, 1.0))
     if m:
         # A pair's bonus y_k counts only when both are chosen: y_k <= x_i, y_k <= x_j.
-        ends = where[extra[:, :2].astype(np.int64)].reshape(-1)
+        ends = where[ij].reshape(-1)
         rows = np.repeat(np.arange(2 * m), 2)
         cols = np.column_stack([np.repeat(n + np.arange(m), 2), ends]).reshape(-1)
         vals = np.tile([1.0, -1.0], 2 * m)

@@ -179,7 +179,7 @@ def oversegment(
             np.zeros(0),
         )
     if graph is None:
-        graph = radius_graph(centers, radius) if m > 1 else sparse.csr_matrix((m, m))
+        graph = radius_graph(centers, radius)
     normals, _ = graph_normals(centers, graph) if m > 1 else (np.tile([0.0, 0, 1], (m, 1)), None)
     g = sparse.triu(graph, k=1).tocoo()
     i, j = g.row.astype(np.int64), g.col.astype(np.int64)
@@ -365,8 +365,7 @@ def propose(
     objects = np.flatnonzero(prepared.object_mask).astype(np.int64)
     radius = seg.radius
     centers = prepared.centers[objects]
-    m = len(objects)
-    graph = radius_graph(centers, radius) if m > 1 else sparse.csr_matrix((m, m))
+    graph = radius_graph(centers, radius)  # an empty graph for fewer than two voxels
     segments = oversegment(
         centers,
         None if prepared.colors is None else prepared.colors[objects],
