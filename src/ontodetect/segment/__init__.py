@@ -36,6 +36,7 @@ from ._measure import (
     describe_clusters,
     hidden_heights,
     open_below,
+    runs_on,
     seen_below,
     shelter_heights,
 )
@@ -83,6 +84,7 @@ __all__ = [
     "radius_graph",
     "region_growing",
     "relabel",
+    "runs_on",
     "seed_style",
     "seeded_clusters",
     "seen_below",
