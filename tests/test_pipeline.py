@@ -344,6 +344,45 @@ def test_majority_keeps_what_most_passes_found():
     assert majority_labels([chair], {0: "table"}, split) == {0: ("table", 3)}
 
 
+def test_a_pass_that_cut_the_points_otherwise_abstains():
+    """Given every cluster of the other passes, a pass none of whose clusters matches a
+    first-pass cluster (point IoU >= 0.5) leaves the vote on it: the majority is of the
+    passes that made that cluster."""
+    from ontodetect.pipeline import majority_labels, pass_probabilities
+
+    chair, desk = _rows(0, 10), _rows(10, 40)
+    merged = _rows(0, 40)  # the chair and the desk it stands under, one cluster
+    pieces = [_rows(0, 3), _rows(3, 7), _rows(7, 10)]  # the chair cut in three
+    # Both other passes merged the chair with the desk and call that a table.
+    others = [[("table", merged)], [("table", merged)]]
+    assert majority_labels([chair], {0: "chair"}, others) == {}
+    assert majority_labels([chair], {0: "chair"}, others, seen=[[merged], [merged]]) == {
+        0: ("chair", 1)
+    }
+    # One pass cut it in three, the other made the same cluster and found it a chair.
+    others = [[], [("chair", chair)]]
+    seen = [pieces, [chair, desk]]
+    assert majority_labels([chair], {0: "chair"}, others, seen=seen) == {0: ("chair", 2)}
+    # A pass that made the same cluster and found no object there still votes against.
+    assert majority_labels([chair], {0: "chair"}, [[], []], seen=[[chair], pieces]) == {}
+    # Without the first pass's label the abstainers cannot make a majority of one.
+    assert majority_labels([chair], {}, [[], [("chair", chair)]], seen=[pieces, [chair]]) == {}
+    # The mean leaves the abstainer out instead of counting it as "none".
+    first = [{"chair": 0.6, "none": 0.4}]
+    runs = [
+        [(h, {"chair": 0.9, "none": 0.1}) for h in pieces],
+        [(chair, {"chair": 0.8, "none": 0.2})],
+    ]
+    assert pass_probabilities([chair], first, runs)[0] == pytest.approx(
+        {"chair": 1.4 / 3, "none": 1.6 / 3}
+    )
+    assert pass_probabilities([chair], first, runs, abstain=True)[0] == pytest.approx(
+        {"chair": 0.7, "none": 0.3}
+    )
+    with pytest.raises(InvalidParameterError, match="seen"):
+        majority_labels([chair], {0: "chair"}, [[], []], seen=[pieces])
+
+
 def test_pass_probabilities_average_the_covering_clusters():
     from ontodetect.pipeline import pass_probabilities
 

@@ -444,6 +444,14 @@ class DetectConfig(_Section):
     vote_turn: float = _param(
         0.7, Interval(0.0, 45.0, "neither"), "Turn (deg) between the passes of a vote."
     )
+    # A pass whose segmentation cut or merged an object's points otherwise than the first
+    # pass did cannot say what that object is: it may abstain instead of counting as "no".
+    vote_abstain: bool = _param(
+        False,
+        Boolean(),
+        "In the vote, a pass with no cluster covering a first-pass cluster (point IoU "
+        ">= 0.5) abstains on it instead of voting 'no object'.",
+    )
     # Every pass holds its own voxels and clusters: a dense scan gets one.
     vote_max_points: int = _param(
         2_000_000,

@@ -194,7 +194,9 @@ def detect(
     ballots = {}
     if turned:
         turns = vote_turns(len(turned) + 1, d.vote_turn)
-        found, choices, ballots = _vote(cloud, seg, scores, choices, found, passes, ontology, turns)
+        found, choices, ballots = _vote(
+            cloud, seg, scores, choices, found, passes, ontology, turns, d.vote_abstain
+        )
         timings["votes"] = time.perf_counter() - t0 - sum(timings.values())
     return numbered_result(
         cloud,

@@ -167,6 +167,7 @@ def majority_labels(
     clusters: Sequence[NDArray[np.int64]],
     first: Mapping[int, str],
     others: Sequence[Sequence[tuple[str, NDArray[np.int64]]]],
+    seen: Sequence[Sequence[NDArray[np.int64]]] | None = None,
 ) -> dict[int, tuple[str, int]]:
     """The labels a majority of passes gives the clusters of the first pass.
 
@@ -178,21 +179,46 @@ def majority_labels(
         The first pass's labels, by cluster.
     others : sequence of sequences of (label, rows)
         The detections of every other pass (sorted rows).
+    seen : sequence of sequences of (k,) int, optional
+        Every cluster of every other pass (objects or not), in the order of ``others``.
+        When given, a pass none of whose clusters covers a cluster of the first pass with
+        point IoU ≥ ``VOTE_IOU`` abstains on it: its segmentation cut or merged those
+        points otherwise, so it cannot say what they are, and the majority is of the
+        passes that made the same cluster (the first pass always does).
 
     Returns
     -------
     dict of int to (label, passes)
-        For each cluster that more than half of all passes label alike (a pass counts
-        when one of its detections of the label covers the cluster with point IoU ≥
-        ``VOTE_IOU``): the label and how many passes found it.
+        For each cluster that more than half of all passes (of those that do not abstain)
+        label alike (a pass counts when one of its detections of the label covers the
+        cluster with point IoU ≥ ``VOTE_IOU``): the label and how many passes found it.
 
     Examples
     --------
     >>> a, b = np.arange(0, 10), np.arange(20, 30)
     >>> majority_labels([a, b], {0: "chair"}, [[("chair", a), ("table", b)], [("table", b[1:])]])
     {0: ('chair', 2), 1: ('table', 2)}
+
+    Both other passes merged the chair into a larger cluster and abstain on it; a pass that
+    made the same cluster and found no object there votes against it:
+
+    >>> merged = np.arange(0, 30)
+    >>> majority_labels([a], {0: "chair"}, [[], []], seen=[[merged], [merged]])
+    {0: ('chair', 1)}
+    >>> majority_labels([a], {0: "chair"}, [[], []], seen=[[a], [merged]])
+    {}
     """
-    need = (len(others) + 1) // 2 + 1
+    voters = np.full(len(clusters), len(others) + 1)
+    if seen is not None:
+        if len(seen) != len(others):
+            raise InvalidParameterError("seen", f"one per other pass ({len(others)})", len(seen))
+        mine = [_rows(rows) for rows in clusters]
+        for run in seen:
+            if run and mine:
+                voters -= point_overlap(mine, [_rows(r) for r in run])[0].max(axis=1) < VOTE_IOU
+            else:
+                voters -= 1
+    needs = voters // 2 + 1
     backing: list[dict[str, int]] = [
         {first[k]: 1} if k in first else {} for k in range(len(clusters))
     ]
@@ -209,6 +235,7 @@ def majority_labels(
             backing[k][label] = backing[k].get(label, 0) + 1
     out: dict[int, tuple[str, int]] = {}
     for k, votes in enumerate(backing):
+        need = int(needs[k])
         winners = sorted(((n, label) for label, n in votes.items() if n >= need), reverse=True)
         if winners:
             out[k] = (winners[0][1], winners[0][0])
@@ -219,6 +246,7 @@ def pass_probabilities(
     clusters: Sequence[NDArray[np.int64]],
     first: Sequence[Mapping[str, float]],
     others: Sequence[Sequence[tuple[NDArray[np.int64], Mapping[str, float]]]],
+    abstain: bool = False,
 ) -> list[dict[str, float]]:
     """P_obj|ont of clusters of the first pass, averaged over all the passes.
 
@@ -230,13 +258,17 @@ def pass_probabilities(
         Their probabilities in the first pass (by class, with ``"none"``).
     others : sequence of sequences of (rows, probabilities)
         Every cluster of every other pass.
+    abstain : bool
+        Leave out a pass with no covering cluster instead of counting it as no object.
 
     Returns
     -------
     list of dict
         For each cluster, the mean over the passes of the probabilities of the cluster
         of that pass that covers it with point IoU ≥ ``VOTE_IOU``; a pass with no such
-        cluster saw no object there and counts as ``{"none": 1}``.
+        cluster saw no object there and counts as ``{"none": 1}``, or, with ``abstain``,
+        is left out of the mean (as :func:`majority_labels` leaves it out of the vote when
+        given every cluster).
 
     Examples
     --------
@@ -247,6 +279,7 @@ def pass_probabilities(
     {'chair': 0.267, 'none': 0.733}
     """
     sums = [dict(p) for p in first]
+    counts = [len(others) + 1] * len(sums)
     if clusters:
         mine = [_rows(rows) for rows in clusters]
         for run in others:
@@ -254,11 +287,14 @@ def pass_probabilities(
             iou = point_overlap(mine, theirs)[0] if theirs else np.zeros((len(mine), 0))
             for k, total in enumerate(sums):
                 j = int(np.argmax(iou[k])) if iou.shape[1] else -1
-                seen = run[j][1] if j >= 0 and iou[k, j] >= VOTE_IOU else {"none": 1.0}
+                covered = j >= 0 and iou[k, j] >= VOTE_IOU
+                if abstain and not covered:
+                    counts[k] -= 1
+                    continue
+                seen = run[j][1] if covered else {"none": 1.0}
                 for name, p in seen.items():
                     total[name] = total.get(name, 0.0) + float(p)
-    n = len(others) + 1
-    return [{name: total / n for name, total in s.items()} for s in sums]
+    return [{name: total / n for name, total in s.items()} for s, n in zip(sums, counts)]
 
 
 def class_for_label(ontology: Ontology, label: str, costs: Mapping[str, float]) -> str:
@@ -280,6 +316,7 @@ def _vote(
     others: list[list[PassCluster]],
     ontology: Ontology,
     turns: Sequence[float],
+    abstain: bool = False,
 ) -> tuple[list[Detection], list[LabelChoice], dict[int, list[Ballot]]]:
     """Keep what a majority of the passes found (:func:`majority_labels`), on the first
     pass's clusters: a detection only the first pass made goes, and one the first pass
@@ -299,6 +336,7 @@ def _vote(
         rows,
         {k: d.label for k, d in first.items()},
         [[(label, r) for r, _, label in run if label is not None] for run in others],
+        seen=[[r for r, _, _ in run] for run in others] if abstain else None,
     )
     passes = len(others) + 1
     choices = list(choices)
@@ -316,6 +354,7 @@ def _vote(
         [rows[k] for k in ks],
         [scores[k].probabilities for k in ks],
         [[(r, p) for r, p, _ in run] for run in others],
+        abstain=abstain,
     )
     for k, mean in zip(ks, means):
         label, n = kept[k]
