@@ -408,6 +408,15 @@ class PlaneConfig(_Section):
         "Plane hypotheses: 'surface' (through the most planar points along their normals; "
         "deterministic) or 'random' (MSAC's random triples, Table 4.1).",
     )
+    # A gently curved seat gives MSAC no plane with more inliers than a slanted one through
+    # seat and backrest, yet its heights pile up in one band: seats and tops are level
+    # (Table 4.1: seat inclination within ±6°) in a levelled scan.
+    level_first: bool = _param(
+        False,
+        Boolean(),
+        "Take each cluster's level layers (points within the inlier distance of one "
+        "height, fitted level) as planes before MSAC looks for the others.",
+    )
     # Issue 21's curved parts: a shell seat or a body-shaped backrest is cut by MSAC into
     # strips; joined along their seams they are one part. Opt-in until the benchmark
     # says it pays (docs/benchmarks.md, "Curved parts").

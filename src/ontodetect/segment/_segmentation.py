@@ -576,6 +576,7 @@ def _build_cluster(
             rng=rng,
             normals=normals,
             variation=variation,
+            level_first=pc.level_first,
         )
         relations = plane_relations(pts, planes) if len(planes) > 1 else []
         if pc.curved and relations:

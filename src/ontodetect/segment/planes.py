@@ -48,6 +48,7 @@ __all__ = [
     "PlaneRelation",
     "curved_patches",
     "extract_planes",
+    "level_layers",
     "msac",
     "plane_relations",
 ]
@@ -107,6 +108,13 @@ CONNECTIVITY_CELLS_PER_RADIUS = 3.0
 #: Candidate planes rejected in a row (too small once split, or too short) before
 #: :func:`extract_planes` gives up on the remaining points.
 MAX_CONSECUTIVE_REJECTIONS = 3
+#: A level layer (``extract_planes(level_first=True)``) is kept as a plane when its
+#: least-squares fit is tilted by no more than this (degrees): Table 4.1's seat
+#: inclination (±6°) with a margin for cushions ...
+LEVEL_MAX_TILT = 10.0
+#: ... and its points spread at least this far across (m): a seat or a top has depth,
+#: while a horizontal band across a slanted or upright surface is a strip.
+LEVEL_MIN_WIDTH = 0.1
 
 #: Default cell of the xy footprint grid used by :func:`plane_relations`, metres.
 FOOTPRINT_CELL = 0.05
@@ -687,6 +695,64 @@ def local_plane(
     return MsacResult(model, _readonly(inliers), best, len(cand))
 
 
+def level_layers(
+    points: ArrayLike,
+    *,
+    threshold: float,
+    min_inliers: int = 3,
+) -> list[NDArray[np.intp]]:
+    """The level layers of a set of points, densest first: the points within a band
+    ``2 * threshold`` high, the bands chosen greedily without overlap among all the bands
+    that start at a point's height, each holding at least ``min_inliers`` points.
+
+    Seats and tops are level (Table 4.1: seat inclination within ±6°) and the scan is
+    levelled: where a gently curved seat gives no plane more inliers than a slanted one
+    through seat and backrest, its heights still pile up in one band. No random draw: the
+    same heights give the same layers, whatever the order of the points.
+
+    Parameters
+    ----------
+    points : (n, 3) float
+        Levelled, z up.
+    threshold : float
+        Half the band's height (> 0): the MSAC inlier distance.
+    min_inliers : int
+        Fewest points (>= 1) in a band.
+
+    Returns
+    -------
+    list of (k,) int
+        Positions of each band's points, ascending, densest band first (ties: the lower).
+
+    Examples
+    --------
+    >>> gen = np.random.default_rng(0)
+    >>> seat = np.column_stack([gen.uniform(0, 0.4, (200, 2)), 0.45 + 0.003 * gen.random(200)])
+    >>> top = np.column_stack([gen.uniform(0, 0.4, (80, 2)), np.full(80, 0.75)])
+    >>> [len(b) for b in level_layers(np.vstack([seat, top]), threshold=0.01, min_inliers=50)]
+    [200, 80]
+    """
+    pts = _as_points(points)
+    t = _positive("threshold", threshold)
+    min_inliers = _integer("min_inliers", min_inliers, 1)
+    z = pts[:, 2]
+    order = np.argsort(z, kind="stable")
+    zs = z[order]
+    ends = np.searchsorted(zs, zs + 2.0 * t, side="right")
+    counts = ends - np.arange(len(zs))
+    taken = np.zeros(len(zs), dtype=bool)
+    out: list[NDArray[np.intp]] = []
+    for start in np.lexsort((np.arange(len(zs)), -counts)):
+        if counts[start] < min_inliers:
+            break
+        band = slice(int(start), int(ends[start]))
+        if taken[band].any():
+            continue
+        taken[band] = True
+        out.append(np.sort(order[band]))
+    return out
+
+
 # -- plane features --------------------------------------------------------------------------
 
 
@@ -1101,6 +1167,7 @@ def extract_planes(
     rng: int | np.random.Generator | None = None,
     normals: ArrayLike | None = None,
     variation: ArrayLike | None = None,
+    level_first: bool = False,
 ) -> list[Plane]:
     """Extract the planes of a cluster one after the other with MSAC.
 
@@ -1144,11 +1211,18 @@ def extract_planes(
         Local normals and surface variation of the points: with them, each plane is
         found by :func:`local_plane` (hypotheses from the surface, no random draw)
         instead of :func:`msac`.
+    level_first : bool
+        First take the densest level layer (:func:`level_layers`) that makes a plane: the
+        level plane at its height, refined on the points as MSAC refines its best plane,
+        still level (within :data:`LEVEL_MAX_TILT`), its largest connected piece passing
+        the same tests and at least :data:`LEVEL_MIN_WIDTH` across; the rest of the points
+        then go to MSAC as usual.
 
     Returns
     -------
     list of Plane
-        In the order found (roughly from the largest).
+        In the order found (roughly from the largest; with ``level_first`` the level
+        layer first).
 
     Raises
     ------
@@ -1208,6 +1282,49 @@ def extract_planes(
         return planes
     cluster_centroid = _col_mean(pts)
     active = np.arange(n)
+    if level_first and max_planes > 0:
+        shift = _col_mean(pts)
+        centered = pts - shift
+        for band in level_layers(pts, threshold=threshold, min_inliers=min_points):
+            # The level plane through the band is MSAC's hypothesis, refined as MSAC
+            # refines its best: a seat that tilts back a few degrees is followed whole.
+            height = float(np.median(pts[band, 2])) - float(shift[2])
+            r = centered[:, 2] - height
+            normal, _, _, r = _refine(
+                centered,
+                np.array([0.0, 0.0, 1.0]),
+                -height,
+                float(np.minimum(r * r, threshold * threshold).sum()),
+                threshold,
+                LOCAL_REFINE,
+            )
+            if abs(float(normal[2])) < math.cos(math.radians(LEVEL_MAX_TILT)):
+                continue
+            near = np.flatnonzero(np.abs(r) <= threshold)
+            if connectivity is not None:
+                uv = pts[near] @ _in_plane_basis(np.asarray(normal, dtype=np.float64)).T
+                near = near[_largest_component(uv, connectivity)]
+            if near.size < min_points:
+                continue
+            plane = _describe(
+                pts,
+                near,
+                rgb,
+                floor_z=float(floor_z),
+                cluster_centroid=cluster_centroid,
+                area_cell=area_cell,
+                rng=gen,
+            )
+            if (
+                plane is None
+                or float(plane.tilt) > LEVEL_MAX_TILT
+                or plane.width < LEVEL_MIN_WIDTH
+                or max(plane.length, plane.width) < min_extent
+            ):
+                continue
+            planes.append(plane)
+            active = np.setdiff1d(active, near, assume_unique=True)
+            break  # one level layer, the densest that is a plane: the rest is MSAC's
     rejections = 0
     with progress("Extracting planes", total=max_planes) as advance:
         while len(planes) < max_planes and active.size >= min_points:
