@@ -4,8 +4,6 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
 
 from ontodetect import InvalidParameterError, point_cloud
 from ontodetect.config import Config
@@ -139,11 +137,6 @@ def test_open_below_sees_the_floor_under_a_table_and_not_under_a_box(rng):
     assert len(tops) == 2  # the 0.4 m block is too low to be measured
     descs = describe_clusters(seg)
     assert [list(d.open_below) for d in descs] == [pytest.approx(v, nan_ok=True) for v in values]
-    # The box, the table and the block stand apart: no upright surface goes on elsewhere.
-    for d in descs:
-        onward = d.scene_values("runs_on")
-        assert len(onward) == len(d.planes)
-        assert all(math.isnan(v) if p.tilt <= 10 else v == 0.0 for p, v in zip(d.planes, onward))
     # From one view the top hides the floor under it: not measured.
     assert all(d.open_below is None for d in describe_clusters(seg, viewpoint=(0, 0, 1.5)))
 
@@ -231,92 +224,6 @@ def test_covered_finds_a_top_over_a_shelf_and_nothing_over_an_armchairs_seat():
     assert level[(3, True)] == 0.0  # nothing over the desk's top
     assert level[(1, False)] < 0.15  # the armchair's arms stand beside its seat
     assert level[(1, True)] == 0.0  # nor does anything stand over the arms
-
-
-def _panel(rng, corner, along, up, spacing=0.02):
-    """A plane-like stand-in for ``runs_on``: points on the rectangle corner + s·along +
-    t·up, with the attributes the measure reads (tilt, normal, offset, length, inliers)."""
-
-    corner, along, up = (np.asarray(v, dtype=float) for v in (corner, along, up))
-    n_s = max(2, int(np.linalg.norm(along) / spacing))
-    n_t = max(2, int(np.linalg.norm(up) / spacing))
-    s, t = np.meshgrid(np.linspace(0, 1, n_s), np.linspace(0, 1, n_t))
-    pts = corner + s.reshape(-1, 1) * along + t.reshape(-1, 1) * up
-    pts = pts + rng.normal(0, 0.002, pts.shape)
-    normal = np.cross(along, up)
-    normal /= np.linalg.norm(normal)
-    tilt = math.degrees(math.acos(min(1.0, abs(float(normal[2])))))
-    length = max(np.linalg.norm(along), np.linalg.norm(up))
-    return pts, dict(
-        normal=normal, offset=-float(normal @ pts.mean(axis=0)), tilt=tilt, length=float(length)
-    )
-
-
-def _clusters(rng, *groups, turn=0.0, move=(0.0, 0.0, 0.0)):
-    """Stand-in clusters for ``runs_on``, each a list of (corner, along, up) panels, the
-    whole scene turned about the vertical by ``turn`` degrees and moved by ``move``."""
-    from types import SimpleNamespace
-
-    c, s = math.cos(math.radians(turn)), math.sin(math.radians(turn))
-    R = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-    out = []
-    for panels in groups:
-        centers, planes = [], []
-        for corner, along, up in panels:
-            pts, a = _panel(rng, corner, along, up)
-            pts = pts @ R.T + np.asarray(move)
-            normal = R @ a["normal"]
-            first = sum(len(p) for p in centers)
-            centers.append(pts)
-            planes.append(
-                SimpleNamespace(
-                    normal=normal,
-                    offset=-float(normal @ pts.mean(axis=0)),
-                    tilt=a["tilt"],
-                    length=a["length"],
-                    inliers=np.arange(first, first + len(pts)),
-                )
-            )
-        out.append(SimpleNamespace(centers=np.vstack(centers), scored_planes=planes))
-    return out
-
-
-#: A seat with a backrest piece whose surface goes on (a headboard's end), and the rest of
-#: that surface, a parallel panel 0.3 m behind, and a coplanar one 0.5 m away.
-_RUN_ON_SCENE = (
-    [((0.0, 0.0, 0.45), (0.5, 0, 0), (0, 0.45, 0)), ((0.0, 0.45, 0.45), (0.5, 0, 0), (0, 0, 0.4))],
-    [((0.52, 0.45, 0.3), (1.0, 0, 0), (0, 0, 0.9))],  # the rest of the headboard, 2 cm on
-    [((0.0, 0.75, 0.45), (0.5, 0, 0), (0, 0, 0.4))],  # a wall 30 cm behind: parallel, apart
-    [((-1.0, 0.45, 0.45), (0.5, 0, 0), (0, 0, 0.4))],  # coplanar but 50 cm aside
-)
-
-
-def test_runs_on_measures_a_surface_that_goes_on_into_another_cluster():
-    """An upright plane continued, coplanar and touching, by another cluster's plane takes
-    that plane's length; a parallel plane apart or a coplanar one out of reach gives 0;
-    level planes are not measured."""
-    from ontodetect.segment import runs_on
-
-    rng = np.random.default_rng(0)
-    values = runs_on(_clusters(rng, *_RUN_ON_SCENE))
-    assert math.isnan(values[0][0])  # the seat: level
-    assert values[0][1] == pytest.approx(1.0, abs=0.01)  # the backrest piece goes on
-    assert values[1][0] == pytest.approx(0.5, abs=0.01)  # and the headboard goes on into it
-    assert values[2] == [0.0] and values[3] == [0.0]
-
-
-@given(
-    turn=st.floats(-180, 180, allow_nan=False),
-    move=st.tuples(*[st.floats(-50, 50, allow_nan=False)] * 3),
-)
-@settings(max_examples=20, deadline=None)
-def test_runs_on_does_not_depend_on_where_the_scan_stands(turn, move):
-    from ontodetect.segment import runs_on
-
-    here = runs_on(_clusters(np.random.default_rng(0), *_RUN_ON_SCENE))
-    there = runs_on(_clusters(np.random.default_rng(0), *_RUN_ON_SCENE, turn=turn, move=move))
-    np.testing.assert_allclose(np.asarray(there[0]), np.asarray(here[0]))
-    assert there[1:] == here[1:]
 
 
 def _rows(a, b):

@@ -326,11 +326,6 @@ for _feature in (
     Feature("covered", "part", "Pr",
             "share of a horizontal plane's outline over which a higher horizontal plane of "
             "the cluster was seen (0..1)", 0.03, scene=True),
-    # A part ends where its object ends: an upright surface that goes on into another
-    # cluster (a headboard beside a nightstand, a wall) is a larger thing's piece.
-    Feature("runs_on", "part", "Pr",
-            "length of the longest upright plane of another cluster that continues this "
-            "upright plane, about coplanar and touching (m; 0 when none)", 0.03, scene=True),
     Feature("angle", "relation", "Pr", "angle between the normals, folded to [0, 90] degrees",
             2.0, relation=_relation_attribute("angle", 0.0)),
     Feature("distance", "relation", "Pr",

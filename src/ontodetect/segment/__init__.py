@@ -36,7 +36,6 @@ from ._measure import (
     describe_clusters,
     hidden_heights,
     open_below,
-    runs_on,
     seen_below,
     shelter_heights,
 )
@@ -84,7 +83,6 @@ __all__ = [
     "radius_graph",
     "region_growing",
     "relabel",
-    "runs_on",
     "seed_style",
     "seeded_clusters",
     "seen_below",

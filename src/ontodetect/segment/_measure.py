@@ -1,8 +1,7 @@
 """Scene measurements the ontology's scoring needs beyond a cluster's own planes: what
 stands beside a cluster (:func:`shelter_heights`), what it hides from a single view
 (:func:`hidden_heights`), whether the floor shows under its tops (:func:`open_below`) and
-whether a lower surface of the cluster shows inside a top's outline (:func:`seen_below`)
-and whether an upright surface goes on into another cluster (:func:`runs_on`);
+whether a lower surface of the cluster shows inside a top's outline (:func:`seen_below`);
 :func:`describe_clusters` gathers them into the scoring's input.
 """
 
@@ -26,9 +25,6 @@ __all__ = [
     "FLOOR_CELL",
     "OPEN_BELOW_HEIGHT",
     "OPEN_BELOW_RIM",
-    "RUN_ON_ANGLE",
-    "RUN_ON_GAP",
-    "RUN_ON_STEP",
     "SEEN_BELOW_CELL",
     "SEEN_BELOW_DROP",
     "SELF_SHADOW",
@@ -40,7 +36,6 @@ __all__ = [
     "describe_clusters",
     "hidden_heights",
     "open_below",
-    "runs_on",
     "seen_below",
     "shelter_heights",
 ]
@@ -54,13 +49,11 @@ def describe_cluster(
     open_below: Sequence[float] | None = None,
     seen_below: Sequence[float] | None = None,
     covered: Sequence[float] | None = None,
-    runs_on: Sequence[float] | None = None,
 ) -> ClusterDescription:
     """What the ontology scoring needs to know about a cluster (``shelter``: see
     :func:`shelter_heights`; ``ceiling``: the top of the search volume;
     ``hidden_below``: see :func:`hidden_heights`; ``open_below``: see
-    :func:`open_below`; ``seen_below``, ``covered`` and ``runs_on``: see
-    :func:`seen_below`, :func:`covered_above` and :func:`runs_on`)."""
+    :func:`open_below`; ``seen_below``: see :func:`seen_below`)."""
     return ClusterDescription(
         planes=cluster.scored_planes,
         relations=cluster.scored_relations,
@@ -74,11 +67,7 @@ def describe_cluster(
         open_below=open_below,
         scene={
             name: values
-            for name, values in (
-                ("seen_below", seen_below),
-                ("covered", covered),
-                ("runs_on", runs_on),
-            )
+            for name, values in (("seen_below", seen_below), ("covered", covered))
             if values is not None
         },
     )
@@ -107,12 +96,9 @@ def describe_clusters(
     # From one view the floor under a top is hidden by the top itself: not measured there.
     below = open_below(seg) if viewpoint is None else [None] * len(seg)
     lower, higher = _outline_shares(seg, (-1, 1))  # seen_below, covered_above
-    onward = runs_on(seg)
     return [
-        describe_cluster(c, float(h), ceiling, float(b), o, s, a, r)
-        for c, h, b, o, s, a, r in zip(
-            seg, shelter_heights(seg), hidden, below, lower, higher, onward, strict=True
-        )
+        describe_cluster(c, float(h), ceiling, float(b), o, s, a)
+        for c, h, b, o, s, a in zip(seg, shelter_heights(seg), hidden, below, lower, higher)
     ]
 
 
@@ -259,79 +245,6 @@ def covered_above(seg: Segmentation) -> list[list[float]]:
     the seat and its back behind it. A desk's pedestal or a shelf under a top is covered.
     """
     return _outline_shares(seg, (1,))[0]
-
-
-#: An upright plane of one cluster and one of another are one surface when their normals
-#: differ by less than this (degrees; the scoring's continuation angle) ...
-RUN_ON_ANGLE = 10.0
-#: ... the other's points lie within this of the first's plane (m) ...
-RUN_ON_STEP = 0.04
-#: ... and come within this of the first's points (m): touching, about a voxel apart.
-RUN_ON_GAP = 0.06
-
-
-def runs_on(seg: Segmentation) -> list[list[float]]:
-    """Per cluster and plane, the length (m) of the longest upright plane of another
-    cluster that continues an upright plane of this one (about coplanar and touching), 0
-    when none does; NaN for horizontal planes.
-
-    A part ends where its object ends. A vertical surface that goes on into a neighbouring
-    cluster is a piece of something larger cut by the segmentation: the end of a bed's
-    headboard beside a nightstand or a pillow, a stretch of wall or partition; a chair's
-    backrest stands free of what surrounds it.
-    """
-    from scipy.spatial import cKDTree  # lazy: only when clusters are described
-
-    cos = math.cos(math.radians(RUN_ON_ANGLE))
-    upright = [
-        [k for k, p in enumerate(c.scored_planes) if float(p.tilt) > HORIZONTAL_TILT] for c in seg
-    ]
-    points = [
-        {k: np.asarray(c.centers)[c.scored_planes[k].inliers] for k in ks}
-        for c, ks in zip(seg, upright, strict=True)
-    ]
-    bounds = np.array(
-        [
-            np.r_[c.centers.min(axis=0), c.centers.max(axis=0)]
-            if len(c.centers)
-            else np.r_[np.full(3, np.inf), np.full(3, -np.inf)]
-            for c in seg
-        ]
-    ).reshape(len(seg), 6)
-    out: list[list[float]] = []
-    for i, c in enumerate(seg):
-        row = [math.nan] * len(c.scored_planes)
-        for k in upright[i]:
-            row[k] = 0.0
-            mine = points[i][k]
-            if not len(mine):
-                continue
-            lo, hi = mine.min(axis=0) - RUN_ON_GAP, mine.max(axis=0) + RUN_ON_GAP
-            near = np.flatnonzero(
-                np.all(bounds[:, :3] <= hi, axis=1) & np.all(bounds[:, 3:] >= lo, axis=1)
-            )
-            plane = c.scored_planes[k]
-            normal = np.asarray(plane.normal, dtype=np.float64)
-            tree = None
-            for j in near:
-                if j == i:
-                    continue
-                for m in upright[j]:
-                    other = seg[j].scored_planes[m]
-                    if float(other.length) <= row[k]:
-                        continue
-                    if abs(float(normal @ np.asarray(other.normal, dtype=np.float64))) < cos:
-                        continue
-                    theirs = points[j][m]
-                    if abs(float(np.median(theirs @ normal)) + float(plane.offset)) > RUN_ON_STEP:
-                        continue
-                    if tree is None:
-                        tree = cKDTree(mine)
-                    gap, _ = tree.query(theirs, k=1, distance_upper_bound=RUN_ON_GAP)
-                    if np.isfinite(gap).any():
-                        row[k] = float(other.length)
-        out.append(row)
-    return out
 
 
 #: What a cluster hides behind it must lie in its shadow for at least this far (m),
