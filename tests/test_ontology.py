@@ -598,3 +598,16 @@ def test_near_names_an_unknown_class_and_needs_a_distance():
     text = NEAR.replace("distance: {max: 0.3, soft: 0.2}, ", "") % "bed"
     with pytest.raises(InvalidOntologyError, match=r"\[classes.stand.near.0\].*distance"):
         parse_ontology(text)
+
+
+def test_a_board_seen_under_the_seat_is_no_chair():
+    """Under a seat are the sitter's legs and the chair's legs or column: a lower board seen
+    inside the seat's outline (a nightstand's or a desk compartment's shelf, ``seen_below``)
+    takes the chair away; none, or the edge of a cross rail, costs it nothing."""
+    o = builtin_ontology()
+    free = score_cluster(replace(chair(), scene={"seen_below": [0.0, math.nan]}), o)
+    rail = score_cluster(replace(chair(), scene={"seen_below": [0.3, math.nan]}), o)
+    shelf = score_cluster(replace(chair(), scene={"seen_below": [0.7, math.nan]}), o)
+    assert free.best == rail.best == "chair"
+    assert rail.probabilities["chair"] == pytest.approx(free.probabilities["chair"])
+    assert shelf.probabilities["chair"] < 0.1 * free.probabilities["chair"]
