@@ -414,8 +414,8 @@ class PlaneConfig(_Section):
     level_first: bool = _param(
         False,
         Boolean(),
-        "Take each cluster's level layers (points within the inlier distance of one "
-        "height, fitted level) as planes before MSAC looks for the others.",
+        "Take each cluster's densest level layer that makes a plane (points within the "
+        "inlier distance of one height, fitted level) before MSAC looks for the others.",
     )
     # Issue 21's curved parts: a shell seat or a body-shaped backrest is cut by MSAC into
     # strips; joined along their seams they are one part. Opt-in until the benchmark

@@ -208,11 +208,11 @@ def majority_labels(
     >>> majority_labels([a], {0: "chair"}, [[], []], seen=[[a], [merged]])
     {}
     """
+    mine = [_rows(rows) for rows in clusters]
     voters = np.full(len(clusters), len(others) + 1)
     if seen is not None:
         if len(seen) != len(others):
             raise InvalidParameterError("seen", f"one per other pass ({len(others)})", len(seen))
-        mine = [_rows(rows) for rows in clusters]
         for run in seen:
             if run and mine:
                 voters -= point_overlap(mine, [_rows(r) for r in run])[0].max(axis=1) < VOTE_IOU
@@ -223,7 +223,7 @@ def majority_labels(
         {first[k]: 1} if k in first else {} for k in range(len(clusters))
     ]
     dets = [(label, _rows(rows)) for run in others for label, rows in run]
-    iou, _ = point_overlap([rows for _, rows in dets], [_rows(rows) for rows in clusters])
+    iou, _ = point_overlap([rows for _, rows in dets], mine)
     run_of = np.repeat(np.arange(len(others)), [len(run) for run in others])
     for r in range(len(others)):
         found = {

@@ -1152,6 +1152,62 @@ def _largest_component(uv: NDArray[np.float64], radius: float) -> NDArray[np.int
     return np.flatnonzero(point_labels == int(np.argmax(sizes)))
 
 
+def _level_plane(
+    pts: NDArray[np.float64],
+    rgb: NDArray[np.float64] | None,
+    *,
+    threshold: float,
+    min_points: int,
+    min_extent: float,
+    connectivity: float | None,
+    floor_z: float,
+    cluster_centroid: NDArray[np.float64],
+    area_cell: float | None,
+    rng: np.random.Generator,
+) -> Plane | None:
+    """The plane of the densest level layer (:func:`level_layers`) that makes one, for
+    ``extract_planes(level_first=True)``; None when no layer does."""
+    centered = pts - cluster_centroid
+    for band in level_layers(pts, threshold=threshold, min_inliers=min_points):
+        # The level plane through the band is MSAC's hypothesis, refined as MSAC refines
+        # its best: a seat that tilts back a few degrees is followed whole.
+        height = float(np.median(pts[band, 2])) - float(cluster_centroid[2])
+        r = centered[:, 2] - height
+        normal, _, _, r = _refine(
+            centered,
+            np.array([0.0, 0.0, 1.0]),
+            -height,
+            float(np.minimum(r * r, threshold * threshold).sum()),
+            threshold,
+            LOCAL_REFINE,
+        )
+        if abs(float(normal[2])) < math.cos(math.radians(LEVEL_MAX_TILT)):
+            continue
+        near = np.flatnonzero(np.abs(r) <= threshold)
+        if connectivity is not None:
+            uv = pts[near] @ _in_plane_basis(np.asarray(normal, dtype=np.float64)).T
+            near = near[_largest_component(uv, connectivity)]
+        if near.size < min_points:
+            continue
+        plane = _describe(
+            pts,
+            near,
+            rgb,
+            floor_z=floor_z,
+            cluster_centroid=cluster_centroid,
+            area_cell=area_cell,
+            rng=rng,
+        )
+        if (
+            plane is not None
+            and float(plane.tilt) <= LEVEL_MAX_TILT
+            and plane.width >= LEVEL_MIN_WIDTH
+            and max(plane.length, plane.width) >= min_extent
+        ):
+            return plane  # one level layer, the densest that is a plane: the rest is MSAC's
+    return None
+
+
 def extract_planes(
     points: ArrayLike,
     colors: ArrayLike | None = None,
@@ -1283,48 +1339,21 @@ def extract_planes(
     cluster_centroid = _col_mean(pts)
     active = np.arange(n)
     if level_first and max_planes > 0:
-        shift = _col_mean(pts)
-        centered = pts - shift
-        for band in level_layers(pts, threshold=threshold, min_inliers=min_points):
-            # The level plane through the band is MSAC's hypothesis, refined as MSAC
-            # refines its best: a seat that tilts back a few degrees is followed whole.
-            height = float(np.median(pts[band, 2])) - float(shift[2])
-            r = centered[:, 2] - height
-            normal, _, _, r = _refine(
-                centered,
-                np.array([0.0, 0.0, 1.0]),
-                -height,
-                float(np.minimum(r * r, threshold * threshold).sum()),
-                threshold,
-                LOCAL_REFINE,
-            )
-            if abs(float(normal[2])) < math.cos(math.radians(LEVEL_MAX_TILT)):
-                continue
-            near = np.flatnonzero(np.abs(r) <= threshold)
-            if connectivity is not None:
-                uv = pts[near] @ _in_plane_basis(np.asarray(normal, dtype=np.float64)).T
-                near = near[_largest_component(uv, connectivity)]
-            if near.size < min_points:
-                continue
-            plane = _describe(
-                pts,
-                near,
-                rgb,
-                floor_z=float(floor_z),
-                cluster_centroid=cluster_centroid,
-                area_cell=area_cell,
-                rng=gen,
-            )
-            if (
-                plane is None
-                or float(plane.tilt) > LEVEL_MAX_TILT
-                or plane.width < LEVEL_MIN_WIDTH
-                or max(plane.length, plane.width) < min_extent
-            ):
-                continue
-            planes.append(plane)
-            active = np.setdiff1d(active, near, assume_unique=True)
-            break  # one level layer, the densest that is a plane: the rest is MSAC's
+        level = _level_plane(
+            pts,
+            rgb,
+            threshold=threshold,
+            min_points=min_points,
+            min_extent=min_extent,
+            connectivity=connectivity,
+            floor_z=float(floor_z),
+            cluster_centroid=cluster_centroid,
+            area_cell=area_cell,
+            rng=gen,
+        )
+        if level is not None:
+            planes.append(level)
+            active = np.setdiff1d(active, level.inliers, assume_unique=True)
     rejections = 0
     with progress("Extracting planes", total=max_planes) as advance:
         while len(planes) < max_planes and active.size >= min_points:
