@@ -139,8 +139,9 @@ def test_the_option_offers_patches_to_the_scoring_only():
     from ontodetect.synth import synthesize
 
     cloud = synthesize("living_room", "rgbd", seed=1, points=50_000).cloud
-    off = segment(cloud, Config(), seed=0, ontology=builtin_ontology())
-    on = segment(cloud, Config().with_overrides(["planes.curved=true"]), seed=0)
+    flat = ["planes.level_surfaces=false"]  # lying surfaces are patches too
+    off = segment(cloud, Config().with_overrides(flat), seed=0, ontology=builtin_ontology())
+    on = segment(cloud, Config().with_overrides([*flat, "planes.curved=true"]), seed=0)
     # Same clusters and planes; the patches come on top.
     assert [len(c.voxels) for c in on] == [len(c.voxels) for c in off]
     assert all(len(a.planes) == len(b.planes) for a, b in zip(on, off))

@@ -426,6 +426,15 @@ class PlaneConfig(_Section):
         "Offer the scoring each cluster's curved surfaces (planes meeting along seams with "
         "normals within 30 deg) as parts besides its planes.",
     )
+    # Issue 21's beds found whole: MSAC takes the largest flat piece of a made bed; the
+    # lying surface its level pieces make is measured whole, for the parts that say
+    # ``lying`` (docs/benchmarks.md, "Lying surfaces").
+    level_surfaces: bool = _param(
+        True,
+        Boolean(),
+        "Offer the scoring each cluster's lying surfaces (level planes that meet, their "
+        "centroids within 8 cm in height) as parts besides its planes.",
+    )
 
 
 @dataclass(frozen=True)

@@ -87,6 +87,9 @@ class Part:
     #: A top: the upright planes under its outline that do not rise above it (legs,
     #: panels, a pedestal) hold it up, and the plane that takes it explains them.
     supports: bool = False
+    #: It may take a lying surface (``planes.level_surfaces``: level pieces of one surface
+    #: at one height, a made bed's duvet and pillows) as well as a plane.
+    lying: bool = False
 
     @property
     def height_span(self) -> tuple[float, float] | None:
@@ -613,14 +616,15 @@ def _part(name: str, spec: Any, path: tuple[Any, ...], seeds: Mapping[str, Any])
         raise _Problem(path + ("required",), f"expected true or false, got {required!r}")
     missing = _probability(spec, "missing", path, DEFAULT_MISSING[required])
     occluded = _probability(spec, "occluded", path)
-    supports = spec.get("supports", False)
-    if not isinstance(supports, bool):
-        raise _Problem(path + ("supports",), f"expected true or false, got {supports!r}")
+    supports, lying = spec.get("supports", False), spec.get("lying", False)
+    for key, value in (("supports", supports), ("lying", lying)):
+        if not isinstance(value, bool):
+            raise _Problem(path + (key,), f"expected true or false, got {value!r}")
     constraints = _constraints(
         spec,
         PART_FEATURES,
         path,
-        {"required", "missing", "occluded", "description", "seed", "cad", "supports"},
+        {"required", "missing", "occluded", "description", "seed", "cad", "supports", "lying"},
     )
     seed = spec.get("seed")
     if seed is not None:
@@ -646,6 +650,7 @@ def _part(name: str, spec: Any, path: tuple[Any, ...], seeds: Mapping[str, Any])
         cad_search=search,
         cad_above_seat=above,
         supports=supports,
+        lying=lying,
     )
 
 

@@ -211,6 +211,13 @@ class ClusterDescription:
         return [frozenset(x) for x in out]
 
     @functools.cached_property
+    def lying(self) -> NDArray[np.bool_]:
+        """(planes,) which planes are lying surfaces (``Patch.kind == "lying"``)."""
+        return np.array(
+            [getattr(p, "kind", None) == "lying" for p in self.planes], dtype=bool
+        ).reshape(-1)
+
+    @functools.cached_property
     def _part_values(self) -> dict[str, NDArray[np.float64]]:
         """:func:`part_values` by feature, filled as the classes ask for them: every class
         scores the same planes, most of them with the same features."""
@@ -351,10 +358,14 @@ def _extra_log(cls: ObjectClass, desc: ClusterDescription) -> np.ndarray:
 
 
 def _unary(cls: ObjectClass, desc: ClusterDescription) -> np.ndarray:
-    """(parts, planes) log-factor of each plane as each part, relations left out."""
+    """(parts, planes) log-factor of each plane as each part, relations left out; a
+    lying surface is no candidate for a part that does not say ``lying``."""
     out = np.zeros((len(cls.parts), len(desc.planes)))
     cache = desc._part_values
+    lying = desc.lying
     for p, part in enumerate(cls.parts):
+        if not part.lying and lying.any():
+            out[p, lying] = -math.inf
         for feature, g in part.constraints.items():
             values = cache.get(feature)
             if values is None:

@@ -28,7 +28,7 @@ from ._cluster import (
     region_growing,
 )
 from ._parts import PartSeed, horizontal_parts, seeded_clusters
-from .planes import curved_patches, extract_planes, plane_relations
+from .planes import curved_patches, extract_planes, level_surfaces, plane_relations
 
 __all__ = ["Box", "Cluster", "Segmentation", "cluster", "clusters_of_voxels", "segment"]
 
@@ -581,10 +581,12 @@ def _build_cluster(
         relations = plane_relations(pts, planes) if len(planes) > 1 else []
         if pc.curved and relations:
             patches = curved_patches(pts, planes, relations, cols, rng=rng)
-            if patches:
-                # The planes' own pairs are measured: only those with a patch are new.
-                added = plane_relations(pts, [*planes, *patches], since=len(planes))
-                patch_relations = [*relations, *added]
+        if pc.level_surfaces and relations:
+            patches = [*patches, *level_surfaces(pts, planes, relations, cols, rng=rng)]
+        if patches:
+            # The planes' own pairs are measured: only those with a patch are new.
+            added = plane_relations(pts, [*planes, *patches], since=len(planes))
+            patch_relations = [*relations, *added]
     flags = _flags(surface, box, planes if fit_planes else None, cc)
     return Cluster(
         id=cid,

@@ -49,6 +49,7 @@ __all__ = [
     "curved_patches",
     "extract_planes",
     "level_layers",
+    "level_surfaces",
     "msac",
     "plane_relations",
 ]
@@ -135,6 +136,14 @@ PATCH_GAP = 0.04
 #: ... and a group is curved when two of its planes differ by more than this (degrees);
 #: flatter groups are pieces of one plane, which the scoring already joins.
 PATCH_MIN_TURN = 10.0
+#: :func:`level_surfaces`: level planes (tilt at most ``LEVEL_TILT`` degrees, the
+#: scoring's horizontal parts) that meet with centroids at most ``LEVEL_STEP`` apart in
+#: height (and inliers as close: a pillow's edge rests on the mattress) are pieces of one
+#: lying surface: a mattress under its pillows and duvet folds. Pillows and seat cushions
+#: stand 5-10 cm proud of what they lie on (catalogue); an armrest or a table top stands
+#: 20 cm and more above a seat (EN 1335-1, Table 4.1), so it never joins one.
+LEVEL_TILT = 10.0
+LEVEL_STEP = 0.08
 
 
 def _readonly(a: NDArray[Any]) -> NDArray[Any]:
@@ -860,10 +869,14 @@ class Patch(Plane):
     spread : float
         Root mean square angle (degrees) between the members' normals and the patch's,
         weighted by the members' areas: 0 for a plane.
+    kind : str
+        ``"curved"`` (:func:`curved_patches`) or ``"lying"`` (:func:`level_surfaces`: level
+        pieces of one lying surface, which only the parts that say ``lying`` may take).
     """
 
     members: tuple[int, ...] = ()
     spread: float = 0.0
+    kind: str = "curved"
 
 
 def curved_patches(
@@ -956,6 +969,104 @@ def curved_patches(
         spread = float(np.sqrt(np.average(np.degrees(np.arccos(cos)) ** 2, weights=areas)))
         fields = {f.name: getattr(fit, f.name) for f in dataclasses.fields(Plane)}
         out.append(Patch(**fields, members=tuple(members), spread=spread))
+    return out
+
+
+def level_surfaces(
+    points: ArrayLike,
+    planes: Sequence[Plane],
+    relations: Sequence[PlaneRelation],
+    colors: ArrayLike | None = None,
+    *,
+    floor_z: float = 0.0,
+    max_tilt: float = LEVEL_TILT,
+    max_step: float = LEVEL_STEP,
+    max_gap: float = LEVEL_STEP,
+    rng: int | np.random.Generator | None = None,
+) -> list[Patch]:
+    """The lying surfaces a cluster's level planes piece together (:class:`Patch`).
+
+    Level planes (tilt at most ``max_tilt`` degrees) join when their inliers come within
+    ``max_gap`` (``relations``, :func:`plane_relations`; a pillow's edge rests on the
+    mattress, a cushion's on the next) and their centroids lie at most ``max_step`` apart
+    in height; each group of two or more is one surface, fitted and
+    measured whole. MSAC takes the largest flat piece of a made bed, a row of cushions or
+    a cluttered top, and the part it stands for then measures a fraction of its length;
+    the surface measures all of it.
+
+    Parameters
+    ----------
+    points : (n, 3) float
+        The points the planes were extracted from (their ``inliers`` index them).
+    planes : sequence of Plane
+    relations : sequence of PlaneRelation
+        Of those planes.
+    colors : (n, 3) float, optional
+    floor_z : float
+        Height of the floor, for the surfaces' ``height``.
+    max_tilt, max_step, max_gap : float
+        Degrees, metres and metres, > 0.
+    rng : int or numpy.random.Generator, optional
+        For the surfaces' rectangle fit, as :func:`extract_planes`.
+
+    Returns
+    -------
+    list of Patch
+        By their lowest member, of ``kind`` ``"lying"``; ``spread`` is the members' tilt
+        about the surface.
+
+    Examples
+    --------
+    >>> gen = np.random.default_rng(0)  # a 2 m mattress and a pillow 6 cm proud of it
+    >>> mattress = np.c_[gen.uniform(0, 1.4, 3000), gen.uniform(0, 1.4, 3000), np.full(3000, 0.5)]
+    >>> pillow = np.c_[gen.uniform(1.4, 2.0, 900), gen.uniform(0, 1.4, 900), np.full(900, 0.56)]
+    >>> pts = np.vstack([mattress, pillow])
+    >>> planes = extract_planes(pts, threshold=0.01, max_planes=4, rng=0)
+    >>> [round(p.length, 1) for p in planes]
+    [1.4, 1.4]
+    >>> surfaces = level_surfaces(pts, planes, plane_relations(pts, planes), rng=0)
+    >>> len(surfaces), round(surfaces[0].length, 1), surfaces[0].members
+    (1, 2.0, (0, 1))
+    """
+    pts = _as_points(points)
+    max_tilt = _positive("max_tilt", max_tilt)
+    max_step = _positive("max_step", max_step, allow_zero=True)
+    max_gap = _positive("max_gap", max_gap, allow_zero=True)
+    n = len(planes)
+    level = [float(p.tilt) <= max_tilt for p in planes]
+    joined = [
+        (r.i, r.j)
+        for r in relations
+        if level[r.i]
+        and level[r.j]
+        and float(r.distance) <= max_gap
+        and abs(float(r.vertical_gap)) <= max_step
+    ]
+    if not joined:
+        return []
+    i, j = np.array(joined, dtype=np.int64).T
+    _, label = connected_components(coo_matrix((np.ones(len(i)), (i, j)), shape=(n, n)))
+    rgb = None if colors is None else np.asarray(colors, dtype=np.float64)
+    gen = np.random.default_rng(rng)
+    centroid = _col_mean(pts)
+    out: list[Patch] = []
+    groups = [np.flatnonzero(label == g).tolist() for g in range(int(label.max()) + 1)]
+    for members in sorted(groups):
+        if len(members) < 2:
+            continue
+        idx = np.unique(np.concatenate([np.asarray(planes[i].inliers) for i in members]))
+        fit = _describe(
+            pts, idx, rgb, floor_z=float(floor_z), cluster_centroid=centroid,
+            area_cell=None, rng=gen,
+        )  # fmt: skip
+        if fit is None or fit.tilt > max_tilt:
+            continue
+        areas = np.array([float(planes[i].area) for i in members])
+        normals = np.array([planes[i].normal for i in members], dtype=np.float64)
+        cos = np.clip(np.abs(normals @ fit.normal), 0.0, 1.0)
+        spread = float(np.sqrt(np.average(np.degrees(np.arccos(cos)) ** 2, weights=areas)))
+        fields = {f.name: getattr(fit, f.name) for f in dataclasses.fields(Plane)}
+        out.append(Patch(**fields, members=tuple(members), spread=spread, kind="lying"))
     return out
 
 
