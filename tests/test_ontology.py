@@ -611,3 +611,34 @@ def test_a_board_seen_under_the_seat_is_no_chair():
     assert free.best == rail.best == "chair"
     assert rail.probabilities["chair"] == pytest.approx(free.probabilities["chair"])
     assert shelf.probabilities["chair"] < 0.1 * free.probabilities["chair"]
+
+
+def _bath_or_bed(seen_below, wall=True):
+    """A 1.7 x 0.75 m top at 0.54 m, a lower level plane inside it at 0.17 m (a bath's
+    floor, 0.37 of the top's outline) and, built in, the tiled wall behind it to 1.4 m."""
+    rim = P(tilt=0, height=0.54, length=1.7, width=0.72, fill=0.7)
+    floor = P(tilt=0, height=0.17, length=1.3, width=0.5, fill=0.8)
+    side = P(tilt=85, height=0.35, length=1.5, width=0.35, cy=0.3)
+    planes = [rim, floor, side]
+    rels = {
+        (0, 1): R(angle=0, distance=0.3, xy_overlap=1.0),
+        (0, 2): R(angle=85, distance=0.02),
+        (1, 2): R(angle=85, distance=0.05),
+    }
+    if wall:
+        planes.append(P(tilt=90, height=0.8, length=1.8, width=1.1, cy=-0.4))
+    desc = cluster(planes, rels, length=1.8, breadth=0.85, height=1.4 if wall else None)
+    return replace(desc, scene={"seen_below": [seen_below, 0.0, math.nan] + [math.nan] * wall})
+
+
+def test_a_bath_built_in_against_its_wall_is_a_bath_and_no_bed():
+    """A bath's cluster takes the wall, taps or screen above it (its height has no upper
+    bound), and a bed's mattress hides the frame under it (``seen_below`` at most 0.1, as a
+    closed top): the tub's floor seen inside the rim is no bed's."""
+    o = builtin_ontology()
+    bath = score_cluster(_bath_or_bed(0.37), o)
+    assert bath.best == "bathtub"
+    assert bath.probabilities["bed"] < 0.5 * bath.probabilities["bathtub"]
+    # The same top with nothing lower seen inside it is as much a bed as ever.
+    closed = score_cluster(_bath_or_bed(0.0), o)
+    assert closed.classes["bed"].log_likelihood > bath.classes["bed"].log_likelihood + 1.0
