@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from numbers import Integral, Real
 from typing import Any
@@ -935,14 +935,40 @@ def curved_patches(
     pts = _as_points(points)
     max_angle = _positive("max_angle", max_angle)
     max_gap = _positive("max_gap", max_gap, allow_zero=True)
-    n = len(planes)
     joined = [
         (r.i, r.j)
         for r in relations
         if float(r.angle) <= max_angle and float(r.distance) <= max_gap
     ]
+    return _joined_patches(
+        pts, planes, joined, colors, floor_z=floor_z, rng=rng, kind="curved",
+        group_ok=lambda normals: _turn(normals) > PATCH_MIN_TURN,
+    )  # fmt: skip
+
+
+def _turn(normals: NDArray[np.float64]) -> float:
+    """The largest angle (degrees) between two of the unit ``normals`` (k, 3), unsigned."""
+    return float(np.degrees(np.arccos(np.clip(np.abs(normals @ normals.T), 0.0, 1.0))).max())
+
+
+def _joined_patches(
+    pts: NDArray[np.float64],
+    planes: Sequence[Plane],
+    joined: Sequence[tuple[int, int]],
+    colors: ArrayLike | None,
+    *,
+    floor_z: float,
+    rng: int | np.random.Generator | None,
+    kind: str,
+    group_ok: Callable[[NDArray[np.float64]], bool] = lambda normals: True,
+    fit_ok: Callable[[Plane], bool] = lambda fit: True,
+) -> list[Patch]:
+    """One :class:`Patch` of ``kind`` for every group of two or more planes the ``joined``
+    pairs connect, fitted to all their inliers and measured whole, by lowest member;
+    ``group_ok`` (on the members' normals) and ``fit_ok`` (on the fit) may turn one down."""
     if not joined:
         return []
+    n = len(planes)
     i, j = np.array(joined, dtype=np.int64).T
     _, label = connected_components(coo_matrix((np.ones(len(i)), (i, j)), shape=(n, n)))
     groups = [np.flatnonzero(label == g).tolist() for g in range(int(label.max()) + 1)]
@@ -954,21 +980,20 @@ def curved_patches(
         if len(members) < 2:
             continue
         normals = np.array([planes[i].normal for i in members], dtype=np.float64)
-        turn = np.degrees(np.arccos(np.clip(np.abs(normals @ normals.T), 0.0, 1.0)))
-        if turn.max() <= PATCH_MIN_TURN:
+        if not group_ok(normals):
             continue
         idx = np.unique(np.concatenate([np.asarray(planes[i].inliers) for i in members]))
         fit = _describe(
             pts, idx, rgb, floor_z=float(floor_z), cluster_centroid=centroid,
             area_cell=None, rng=gen,
         )  # fmt: skip
-        if fit is None:
+        if fit is None or not fit_ok(fit):
             continue
         areas = np.array([float(planes[i].area) for i in members])
         cos = np.clip(np.abs(normals @ fit.normal), 0.0, 1.0)
         spread = float(np.sqrt(np.average(np.degrees(np.arccos(cos)) ** 2, weights=areas)))
         fields = {f.name: getattr(fit, f.name) for f in dataclasses.fields(Plane)}
-        out.append(Patch(**fields, members=tuple(members), spread=spread))
+        out.append(Patch(**fields, members=tuple(members), spread=spread, kind=kind))
     return out
 
 
@@ -1032,7 +1057,6 @@ def level_surfaces(
     max_tilt = _positive("max_tilt", max_tilt)
     max_step = _positive("max_step", max_step, allow_zero=True)
     max_gap = _positive("max_gap", max_gap, allow_zero=True)
-    n = len(planes)
     level = [float(p.tilt) <= max_tilt for p in planes]
     joined = [
         (r.i, r.j)
@@ -1042,32 +1066,10 @@ def level_surfaces(
         and float(r.distance) <= max_gap
         and abs(float(r.vertical_gap)) <= max_step
     ]
-    if not joined:
-        return []
-    i, j = np.array(joined, dtype=np.int64).T
-    _, label = connected_components(coo_matrix((np.ones(len(i)), (i, j)), shape=(n, n)))
-    rgb = None if colors is None else np.asarray(colors, dtype=np.float64)
-    gen = np.random.default_rng(rng)
-    centroid = _col_mean(pts)
-    out: list[Patch] = []
-    groups = [np.flatnonzero(label == g).tolist() for g in range(int(label.max()) + 1)]
-    for members in sorted(groups):
-        if len(members) < 2:
-            continue
-        idx = np.unique(np.concatenate([np.asarray(planes[i].inliers) for i in members]))
-        fit = _describe(
-            pts, idx, rgb, floor_z=float(floor_z), cluster_centroid=centroid,
-            area_cell=None, rng=gen,
-        )  # fmt: skip
-        if fit is None or fit.tilt > max_tilt:
-            continue
-        areas = np.array([float(planes[i].area) for i in members])
-        normals = np.array([planes[i].normal for i in members], dtype=np.float64)
-        cos = np.clip(np.abs(normals @ fit.normal), 0.0, 1.0)
-        spread = float(np.sqrt(np.average(np.degrees(np.arccos(cos)) ** 2, weights=areas)))
-        fields = {f.name: getattr(fit, f.name) for f in dataclasses.fields(Plane)}
-        out.append(Patch(**fields, members=tuple(members), spread=spread, kind="lying"))
-    return out
+    return _joined_patches(
+        pts, planes, joined, colors, floor_z=floor_z, rng=rng, kind="lying",
+        fit_ok=lambda fit: fit.tilt <= max_tilt,
+    )  # fmt: skip
 
 
 def _in_plane_basis(normal: NDArray[np.float64]) -> NDArray[np.float64]:
