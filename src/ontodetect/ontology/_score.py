@@ -213,9 +213,7 @@ class ClusterDescription:
     @functools.cached_property
     def lying(self) -> NDArray[np.bool_]:
         """(planes,) which planes are lying surfaces (``Patch.kind == "lying"``)."""
-        return np.array(
-            [getattr(p, "kind", None) == "lying" for p in self.planes], dtype=bool
-        ).reshape(-1)
+        return np.array([getattr(p, "kind", None) == "lying" for p in self.planes], dtype=bool)
 
     @functools.cached_property
     def _part_values(self) -> dict[str, NDArray[np.float64]]:
