@@ -751,6 +751,21 @@ def main(argv: list[str] | None = None) -> int:
         help="a configuration value for detection, e.g. detect.proposals=recognition (repeatable)",
     )
     ap.add_argument(
+        "--ontology",
+        dest="ontologies",
+        action="append",
+        default=[],
+        type=Path,
+        metavar="FILE",
+        help="an ontology YAML merged into the built-in one, as `ontodetect detect --ontology` "
+        "takes it (repeatable): an edited class measured before it is built in",
+    )
+    ap.add_argument(
+        "--ontology-only",
+        action="store_true",
+        help="use only the --ontology files, not the built-in ontology (an edited copy of it)",
+    )
+    ap.add_argument(
         "--room",
         default="auto",
         help="the room prior of every detection: auto (estimated from the scan, the default), "
@@ -811,6 +826,11 @@ def main(argv: list[str] | None = None) -> int:
     if args.jobs < 0:
         ap.error(f"--jobs must be >= 0, got {args.jobs}")
     try:
+        args.ontology = _ontology_option(args.ontologies, args.ontology_only)
+    except OntoDetectError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    try:
         real_scenes = _real_scenes(args.real, args.quick)
     except OntoDetectError as exc:
         print(f"error: --real {args.real}: {exc}", file=sys.stderr)
@@ -820,6 +840,25 @@ def main(argv: list[str] | None = None) -> int:
     except OntoDetectError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+
+
+def _ontology_option(files: Sequence[Path], only: bool) -> Any:
+    """``--ontology`` / ``--ontology-only`` as ``ontodetect detect`` reads them (None: the
+    built-in ontology), checked before any scan is read."""
+    if not files and not only:
+        return None
+    from ontodetect.cli._common import load_ontology_option
+
+    return load_ontology_option(list(files), only)
+
+
+def _ontology_record(files: Sequence[Path], only: bool) -> list[dict[str, Any]]:
+    """What generalization.json records of the ontology files: name and SHA-256, so that
+    two runs say whether they measured the same rules."""
+    return [
+        {"path": str(f), "sha256": hashlib.sha256(Path(f).read_bytes()).hexdigest(), "only": only}
+        for f in files
+    ]
 
 
 def _room_option(room: str) -> str | None:
@@ -839,6 +878,8 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
     opts: dict[str, Any] = {"seed": args.seed, "room": _room_option(args.room)}
     if args.overrides:
         opts["config"] = Config().with_overrides(args.overrides)
+    if getattr(args, "ontology", None) is not None:
+        opts["ontology"] = args.ontology
     source = room_source(args.source)
     reporter = RichReporter() if err.is_terminal else None
     doc: dict[str, Any] = {
@@ -848,6 +889,9 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
         "jobs": jobs,
         "seed": args.seed,
         "overrides": list(args.overrides),
+        "ontology": _ontology_record(
+            getattr(args, "ontologies", []), getattr(args, "ontology_only", False)
+        ),
         "room": args.room,
         "scene_source": dataclasses.asdict(source),
     }

@@ -1,0 +1,295 @@
+"""Compare two runs of the generalization benchmark: every figure before → after.
+
+Run as ``python -m benchmarks compare BEFORE.json AFTER.json [--iou 0.25]``, with two
+``generalization.json`` files written by ``python -m benchmarks generalization``. A change to
+the method is kept only when it helps the simulated rooms, costs nothing on the real scans
+and keeps stability (docs/ontology.md, "How a prior is chosen"); this prints the three side
+by side, so that the note of a change can give all three:
+
+- real and simulated scans: TP / detections / ground truth, precision and recall per class;
+- simulated scans by room type: TP / detections per reported class;
+- the false detections by what they really are, and the chair groups' recall;
+- stability: mean and worst, and per change of the scan.
+
+A part one of the runs did not measure (``--only``) is left out, and said so. Rows that did
+not change are printed dim; ``--changed`` prints only the rows that did.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+from typing import Any
+
+from rich.console import Console
+from rich.table import Table
+
+console = Console(highlight=False)
+err = Console(stderr=True, highlight=False)
+
+#: The generalization benchmark's file format this reads (``format`` in the JSON).
+FORMATS = ("ontodetect.bench.generalization/1",)
+
+
+class CompareError(Exception):
+    """A file that is not a generalization benchmark result: one line for the user."""
+
+
+def load_run(path: Path) -> dict[str, Any]:
+    """A ``generalization.json``, checked enough to compare (:class:`CompareError` if not)."""
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except OSError as exc:
+        raise CompareError(f"{path}: cannot read it ({exc.strerror or exc})") from None
+    try:
+        doc = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise CompareError(f"{path}: not JSON (line {exc.lineno}: {exc.msg})") from None
+    if not isinstance(doc, dict) or not any(k in doc for k in ("real", "simulated", "stability")):
+        raise CompareError(
+            f"{path}: not a generalization benchmark result (no 'real', 'simulated' or "
+            "'stability' part)"
+        )
+    fmt = doc.get("format")
+    if fmt is not None and fmt not in FORMATS:
+        raise CompareError(f"{path}: format {fmt!r}, expected one of {', '.join(FORMATS)}")
+    return doc
+
+
+def _key(iou: float) -> str:
+    return f"iou@{iou:g}"
+
+
+def _cell(fig: Mapping[str, Any] | None) -> str:
+    """``TP/det/GT`` of one class's figures; ``-`` when the run has none."""
+    if not fig:
+        return "-"
+    return f"{fig.get('tp', 0)}/{fig.get('det', 0)}/{fig.get('gt', 0)}"
+
+
+def _pr(fig: Mapping[str, Any] | None) -> str:
+    if not fig:
+        return "-"
+    return f"{fig.get('precision', 0.0):.2f} / {fig.get('recall', 0.0):.2f}"
+
+
+def class_rows(
+    before: Mapping[str, Any] | None, after: Mapping[str, Any] | None
+) -> list[tuple[str, str, str, str, str]]:
+    """Per class: name, TP/det/GT before and after, P / R before and after."""
+    before, after = before or {}, after or {}
+    names = _ordered(list(before) + list(after))
+    return [
+        (c, _cell(before.get(c)), _cell(after.get(c)), _pr(before.get(c)), _pr(after.get(c)))
+        for c in names
+    ]
+
+
+def _ordered(names: Iterable[str]) -> list[str]:
+    """Unique names in first-seen order, ``overall`` last."""
+    seen = list(dict.fromkeys(names))
+    return [n for n in seen if n != "overall"] + (["overall"] if "overall" in seen else [])
+
+
+def room_rows(
+    before: Mapping[str, Any], after: Mapping[str, Any], key: str
+) -> tuple[list[str], list[tuple[str, ...]]]:
+    """Per simulated room type, TP/det of each reported class before and after: the
+    classes, and rows ``(room, class 1 before, class 1 after, class 2 before, ...)``."""
+    rooms = _ordered(list(before) + list(after))
+    classes = _ordered(c for figs in (*before.values(), *after.values()) for c in figs.get(key, {}))
+    classes = [c for c in classes if c != "overall"]
+
+    def cell(figs: Mapping[str, Any] | None, c: str) -> str:
+        f = (figs or {}).get(key, {}).get(c)
+        return "-" if f is None else f"{f.get('tp', 0)}/{f.get('det', 0)}"
+
+    rows = [
+        (r, *(v for c in classes for v in (cell(before.get(r), c), cell(after.get(r), c))))
+        for r in rooms
+    ]
+    return classes, rows
+
+
+def false_rows(
+    before: Mapping[str, Any], after: Mapping[str, Any]
+) -> list[tuple[str, int, int, str, str]]:
+    """Per kind of false detection (what it really is): total before, after, and as what
+    it was detected; most frequent first."""
+    kinds = _ordered(list(before) + list(after))
+
+    def total(d: Mapping[str, Any], k: str) -> int:
+        return int(d.get(k, {}).get("total", 0))
+
+    def as_(d: Mapping[str, Any], k: str) -> str:
+        parts = d.get(k, {}).get("as", {})
+        return ", ".join(f"{n} {c}" for n, c in sorted(parts.items(), key=lambda kv: -kv[1]) if c)
+
+    rows = [(k, total(before, k), total(after, k), as_(before, k), as_(after, k)) for k in kinds]
+    return sorted(rows, key=lambda r: (-max(r[1], r[2]), r[0]))
+
+
+def stability_rows(
+    before: Mapping[str, Any], after: Mapping[str, Any]
+) -> list[tuple[str, str, str]]:
+    """Mean / worst reappearance, overall and per change of the scan, before and after."""
+
+    def fig(s: Mapping[str, Any] | None) -> str:
+        if not s or s.get("mean") is None:
+            return "-"
+        return f"{s['mean']:.4f} / {s['worst']:.4f}"
+
+    rows = [("all", fig(before), fig(after))]
+    per_b, per_a = before.get("per_transform", {}), after.get("per_transform", {})
+    for name in _ordered(list(per_b) + list(per_a)):
+        rows.append((name, fig(per_b.get(name)), fig(per_a.get(name))))
+    return rows
+
+
+def _table(
+    title: str, columns: list[str], rows: list[tuple[Any, ...]], changed: bool
+) -> Table | str:
+    """The rows as a table, unchanged ones dim (left out with ``changed``: a line saying
+    so when nothing is left)."""
+    if changed:
+        rows = [row for row in rows if not _same(row)]
+        if not rows:
+            return f"{title}: no change"
+    table = Table(title=title, title_justify="left")
+    for i, name in enumerate(columns):
+        table.add_column(name, justify="left" if i == 0 else "right", no_wrap=i == 0)
+    for row in rows:
+        table.add_row(*(str(v) for v in row), style="dim" if _same(row) else None)
+    return table
+
+
+def _same(row: tuple[Any, ...]) -> bool:
+    """A row is unchanged when its "before" and "after" cells agree pairwise."""
+    values = row[1:]
+    if len(values) == 4:  # TP/det/GT before, after, P/R before, after
+        return values[0] == values[1]
+    return all(values[i] == values[i + 1] for i in range(0, len(values) - 1, 2))
+
+
+def compare(
+    before: Mapping[str, Any], after: Mapping[str, Any], *, iou: float = 0.25, changed: bool = False
+) -> list[Table | str]:
+    """The tables of a comparison (and lines for what cannot be compared)."""
+    key = _key(iou)
+    out: list[Table | str] = []
+    for part, title in (("real", "Real scans"), ("simulated", "Simulated rooms")):
+        b, a = before.get(part), after.get(part)
+        if b is None or a is None:
+            out.append(f"{title}: not in {'the first' if b is None else 'the second'} run")
+            continue
+        out.append(
+            _table(
+                f"{title}, TP/det/GT at point IoU {iou:g}",
+                ["class", "before", "after", "P / R before", "P / R after"],
+                class_rows(b["per_class"].get(key), a["per_class"].get(key)),
+                changed,
+            )
+        )
+        if part == "simulated":
+            classes, rows = room_rows(b.get("by_room_type", {}), a.get("by_room_type", {}), key)
+            out.append(
+                _table(
+                    "Simulated rooms by room type, TP/det",
+                    ["room", *(f"{c} {w}" for c in classes for w in ("before", "after"))],
+                    rows,
+                    changed,
+                )
+            )
+            groups_b = b.get("chair_groups", {}).get(key, {})
+            groups_a = a.get("chair_groups", {}).get(key, {})
+            out.append(
+                _table(
+                    "Chairs by group, found/GT",
+                    ["group", "before", "after"],
+                    [
+                        (
+                            g,
+                            _found(groups_b.get(g)),
+                            _found(groups_a.get(g)),
+                        )
+                        for g in _ordered(list(groups_b) + list(groups_a))
+                    ],
+                    changed,
+                )
+            )
+        out.append(
+            _table(
+                f"{title}: what the false detections are",
+                ["really is", "before", "after", "detected as, before", "detected as, after"],
+                [
+                    (k, tb, ta, sb, sa)
+                    for k, tb, ta, sb, sa in false_rows(
+                        b.get("false_detections", {}).get(key, {}),
+                        a.get("false_detections", {}).get(key, {}),
+                    )
+                ],
+                changed,
+            )
+        )
+    b, a = before.get("stability"), after.get("stability")
+    if b is None or a is None:
+        out.append(f"Stability: not in {'the first' if b is None else 'the second'} run")
+    else:
+        out.append(
+            _table(
+                "Stability: detections that reappear, mean / worst",
+                ["change of the scan", "before", "after"],
+                stability_rows(b, a),
+                changed,
+            )
+        )
+    return out
+
+
+def _found(g: Mapping[str, Any] | None) -> str:
+    return "-" if not g else f"{g.get('found', 0)}/{g.get('gt', 0)}"
+
+
+def _settings(doc: Mapping[str, Any]) -> str:
+    bits = [f"room {doc.get('room', '?')}"]
+    if doc.get("overrides"):
+        bits.append("--set " + " --set ".join(doc["overrides"]))
+    files = doc.get("ontology") or []
+    if any(o.get("only") for o in files):
+        bits.append("--ontology-only")
+    for o in files:
+        bits.append(f"--ontology {o.get('path')} (sha256 {str(o.get('sha256'))[:12]})")
+    if doc.get("quick"):
+        bits.append("quick")
+    return ", ".join(bits)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Parse, load both files (one line and status 2 when one is bad), print."""
+    ap = argparse.ArgumentParser(
+        prog="python -m benchmarks compare", description=__doc__.splitlines()[0]
+    )
+    ap.add_argument("before", type=Path, help="generalization.json of the run before the change")
+    ap.add_argument("after", type=Path, help="generalization.json of the run after it")
+    ap.add_argument("--iou", type=float, default=0.25, help="point IoU of the figures: 0.25 or 0.5")
+    ap.add_argument("--changed", action="store_true", help="print only the rows that changed")
+    args = ap.parse_args(argv)
+    if args.iou not in (0.25, 0.5):
+        err.print(f"--iou must be 0.25 or 0.5, got {args.iou:g}", soft_wrap=True)
+        return 2
+    try:
+        before, after = load_run(args.before), load_run(args.after)
+    except CompareError as exc:
+        err.print(str(exc), soft_wrap=True)
+        return 2
+    console.print(f"before: {args.before} ({_settings(before)})")
+    console.print(f"after:  {args.after} ({_settings(after)})")
+    for item in compare(before, after, iou=args.iou, changed=args.changed):
+        console.print(item)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

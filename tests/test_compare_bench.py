@@ -1,0 +1,193 @@
+"""`python -m benchmarks compare`: two generalization runs side by side, on hand-made files."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from benchmarks import bench_compare as C
+from benchmarks import bench_generalization as B
+from rich.console import Console
+from rich.table import Table
+
+
+def fig(tp, det, gt):
+    return {
+        "tp": tp,
+        "det": det,
+        "gt": gt,
+        "precision": tp / det if det else 0.0,
+        "recall": tp / gt if gt else 0.0,
+    }
+
+
+def run_doc(*, chairs=(8, 10, 12), wc_as_chair=2, mean=0.9, stability=True, real=True):
+    key = "iou@0.25"
+    doc = {
+        "format": B.FORMAT,
+        "room": "auto",
+        "overrides": [],
+        "simulated": {
+            "per_class": {key: {"chair": fig(*chairs), "table": fig(3, 4, 5)}},
+            "by_room_type": {
+                "office": {key: {"chair": fig(*chairs), "overall": fig(9, 12, 14)}},
+                "bathroom": {key: {"chair": fig(0, wc_as_chair, 0)}},
+            },
+            "chair_groups": {key: {"easy chairs": {"found": 2, "gt": 3, "recall": 0.67}}},
+            "false_detections": {
+                key: {"toilet": {"total": wc_as_chair, "as": {"chair": wc_as_chair}}}
+            },
+        },
+    }
+    if real:
+        doc["real"] = {
+            "per_class": {key: {"chair": fig(23, 25, 26)}},
+            "false_detections": {key: {}},
+        }
+    if stability:
+        doc["stability"] = {
+            "mean": mean,
+            "worst": 0.5,
+            "per_transform": {"turn 90°": {"mean": mean, "worst": 0.5}},
+        }
+    return doc
+
+
+def write(tmp_path, name, doc):
+    path = tmp_path / name
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    return path
+
+
+def cells(table: Table) -> list[list[str]]:
+    """The table's rows as lists of strings."""
+    columns = [list(c.cells) for c in table.columns]
+    return [list(row) for row in zip(*columns)]
+
+
+def test_class_rows_give_before_and_after_side_by_side():
+    rows = C.class_rows({"chair": fig(8, 10, 12)}, {"chair": fig(9, 10, 12), "sofa": fig(1, 2, 2)})
+    assert rows == [
+        ("chair", "8/10/12", "9/10/12", "0.80 / 0.67", "0.90 / 0.75"),
+        ("sofa", "-", "1/2/2", "-", "0.50 / 0.50"),
+    ]
+
+
+def test_room_rows_give_each_reported_class_per_room():
+    key = "iou@0.25"
+    before = {"office": {key: {"chair": fig(8, 10, 12), "overall": fig(8, 10, 12)}}}
+    after = {"office": {key: {"chair": fig(9, 10, 12)}}, "bathroom": {key: {"chair": fig(0, 1, 0)}}}
+    classes, rows = C.room_rows(before, after, key)
+    assert classes == ["chair"]  # "overall" is no class
+    assert rows == [("office", "8/10", "9/10"), ("bathroom", "-", "0/1")]
+
+
+def test_false_rows_come_most_frequent_first_with_what_they_were_taken_for():
+    before = {"toilet": {"total": 2, "as": {"chair": 2}}, "sink": {"total": 5, "as": {"table": 5}}}
+    after = {"sink": {"total": 1, "as": {"table": 1}}, "bed": {"total": 3, "as": {"sofa": 2}}}
+    assert C.false_rows(before, after) == [
+        ("sink", 5, 1, "table 5", "table 1"),
+        ("bed", 0, 3, "", "sofa 2"),
+        ("toilet", 2, 0, "chair 2", ""),
+    ]
+
+
+def test_stability_rows_give_mean_and_worst_per_change():
+    before = {"mean": 0.9, "worst": 0.5, "per_transform": {"turn 90°": {"mean": 0.8, "worst": 0.5}}}
+    after = {"mean": 0.95, "worst": 0.75, "per_transform": {}}
+    assert C.stability_rows(before, after) == [
+        ("all", "0.9000 / 0.5000", "0.9500 / 0.7500"),
+        ("turn 90°", "0.8000 / 0.5000", "-"),
+    ]
+
+
+def test_compare_of_a_run_with_itself_changes_nothing():
+    doc = run_doc()
+    items = C.compare(doc, doc, changed=True)
+    assert items and all(isinstance(i, str) and i.endswith("no change") for i in items)
+    # Without --changed every row is printed, dim.
+    tables = [i for i in C.compare(doc, doc) if isinstance(i, Table)]
+    assert tables and all(row.style == "dim" for t in tables for row in t.rows)
+
+
+def test_compare_keeps_only_what_changed_and_says_what_a_run_lacks():
+    before = run_doc()
+    after = run_doc(chairs=(9, 10, 12), wc_as_chair=0, mean=0.95, real=False)
+    items = C.compare(before, after, changed=True)
+    text = [i for i in items if isinstance(i, str)]
+    assert "Real scans: not in the second run" in text
+    tables = {i.title: i for i in items if isinstance(i, Table)}
+    sim = cells(tables["Simulated rooms, TP/det/GT at point IoU 0.25"])
+    assert sim == [["chair", "8/10/12", "9/10/12", "0.80 / 0.67", "0.90 / 0.75"]]
+    rooms = cells(tables["Simulated rooms by room type, TP/det"])
+    assert rooms == [["office", "8/10", "9/10"], ["bathroom", "0/2", "0/0"]]
+    false = cells(tables["Simulated rooms: what the false detections are"])
+    assert false == [["toilet", "2", "0", "chair 2", ""]]
+    stab = cells(tables["Stability: detections that reappear, mean / worst"])
+    assert stab == [
+        ["all", "0.9000 / 0.5000", "0.9500 / 0.5000"],
+        ["turn 90°", "0.9000 / 0.5000", "0.9500 / 0.5000"],
+    ]
+
+
+def test_main_prints_both_runs_settings_and_the_tables(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(C, "console", Console(width=200, highlight=False))
+    before = write(tmp_path, "a.json", run_doc())
+    after_doc = run_doc(chairs=(9, 10, 12))
+    after_doc["overrides"] = ["detect.votes=1"]
+    after_doc["ontology"] = [{"path": "mine.yaml", "sha256": "ab" * 32, "only": False}]
+    after = write(tmp_path, "b.json", after_doc)
+    assert C.main([str(before), str(after), "--changed"]) == 0
+    out = capsys.readouterr().out
+    assert "--set detect.votes=1" in out and "--ontology mine.yaml" in out
+    assert "8/10/12" in out and "9/10/12" in out
+    assert "Real scans, TP/det/GT at point IoU 0.25: no change" in out
+
+
+@pytest.mark.parametrize(
+    ("content", "says"),
+    [
+        (None, "cannot read it"),
+        ("{not json", "not JSON"),
+        ('{"rooms": 1}', "not a generalization benchmark result"),
+        ('{"format": "other/1", "real": {}}', "format 'other/1'"),
+    ],
+)
+def test_a_bad_file_is_one_line_naming_it_and_exit_2(tmp_path, capsys, content, says):
+    bad = tmp_path / "bad.json"
+    if content is not None:
+        bad.write_text(content, encoding="utf-8")
+    good = write(tmp_path, "good.json", run_doc())
+    assert C.main([str(good), str(bad)]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and str(bad) in lines[0] and says in lines[0]
+
+
+def test_only_the_two_overlaps_of_the_benchmark_are_compared(tmp_path, capsys):
+    good = write(tmp_path, "good.json", run_doc())
+    assert C.main([str(good), str(good), "--iou", "0.3"]) == 2
+    assert "--iou" in capsys.readouterr().err
+
+
+# -- the generalization benchmark's --ontology ---------------------------------------------
+def test_a_bad_ontology_file_is_one_line_and_exit_2_before_any_scan_is_read(tmp_path, capsys):
+    bad = tmp_path / "mine.yaml"
+    bad.write_text("classes: [1, 2\n", encoding="utf-8")
+    out = tmp_path / "out"
+    argv = ["--real", str(tmp_path / "nowhere"), "--out", str(out), "--ontology", str(bad)]
+    assert B.main(argv) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and str(bad) in lines[0]
+    assert not out.exists()
+    # --ontology-only without a file is refused the same way.
+    assert B.main(["--real", str(tmp_path), "--out", str(out), "--ontology-only"]) == 2
+    assert "--ontology-only" in capsys.readouterr().err
+
+
+def test_the_ontology_files_are_recorded_with_their_digest(tmp_path):
+    mine = tmp_path / "mine.yaml"
+    mine.write_text("format: ontodetect.ontology/1\nclasses: {}\n", encoding="utf-8")
+    (record,) = B._ontology_record([mine], True)
+    assert record["path"] == str(mine) and record["only"] is True
+    assert len(record["sha256"]) == 64
+    assert B._ontology_record([], False) == []
