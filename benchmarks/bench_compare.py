@@ -12,13 +12,15 @@ by side, so that the note of a change can give all three:
 - stability: mean and worst, and per change of the scan.
 
 A part one of the runs did not measure (``--only``) is left out, and said so. Rows that did
-not change are printed dim; ``--changed`` prints only the rows that did.
+not change are printed dim; ``--changed`` prints only the rows that did. ``--markdown``
+prints Markdown tables instead, to paste into a note or docs/benchmarks.md.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import sys
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
@@ -248,6 +250,25 @@ def compare(
     return out
 
 
+def markdown(items: Iterable[Table | str]) -> str:
+    """The comparison as Markdown (a heading and a pipe table for each table, a paragraph
+    for each line), to paste into a change's note or docs/benchmarks.md."""
+    out: list[str] = []
+    for item in items:
+        if isinstance(item, str):
+            out += [item, ""]
+            continue
+        columns = item.columns
+        header = [str(c.header).replace("\n", " ") for c in columns]
+        rows = list(zip(*(list(c.cells) for c in columns)))
+        align = ["---" if i == 0 else "---:" for i in range(len(columns))]
+        out += [f"**{item.title}**", ""]
+        out += ["| " + " | ".join(line) + " |" for line in (header, align)]
+        out += ["| " + " | ".join(str(v).replace("|", "\\|") for v in row) + " |" for row in rows]
+        out.append("")
+    return "\n".join(out).rstrip("\n") + "\n"
+
+
 def _found(g: Mapping[str, Any] | None) -> str:
     return "-" if not g else f"{g.get('found', 0)}/{g.get('gt', 0)}"
 
@@ -275,6 +296,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("after", type=Path, help="generalization.json of the run after it")
     ap.add_argument("--iou", type=float, default=0.25, help="point IoU of the figures: 0.25 or 0.5")
     ap.add_argument("--changed", action="store_true", help="print only the rows that changed")
+    ap.add_argument(
+        "--markdown", action="store_true", help="print Markdown tables (for a note or the docs)"
+    )
     args = ap.parse_args(argv)
     if args.iou not in (0.25, 0.5):
         err.print(f"--iou must be 0.25 or 0.5, got {args.iou:g}", soft_wrap=True)
@@ -284,9 +308,15 @@ def main(argv: list[str] | None = None) -> int:
     except CompareError as exc:
         err.print(str(exc), soft_wrap=True)
         return 2
-    console.print(f"before: {args.before} ({_settings(before)})")
-    console.print(f"after:  {args.after} ({_settings(after)})")
-    for item in compare(before, after, iou=args.iou, changed=args.changed):
+    items = compare(before, after, iou=args.iou, changed=args.changed)
+    heading = [
+        f"before: {args.before} ({_settings(before)})",
+        f"after: {args.after} ({_settings(after)})",
+    ]
+    if args.markdown:
+        sys.stdout.write(markdown([*heading, *items]))
+        return 0
+    for item in [*heading, *items]:
         console.print(item)
     return 0
 

@@ -191,3 +191,25 @@ def test_the_ontology_files_are_recorded_with_their_digest(tmp_path):
     assert record["path"] == str(mine) and record["only"] is True
     assert len(record["sha256"]) == 64
     assert B._ontology_record([], False) == []
+
+
+def test_markdown_gives_a_pipe_table_per_table_and_a_paragraph_per_line(tmp_path, capsys):
+    before = run_doc()
+    after = run_doc(chairs=(9, 10, 12), stability=False)
+    text = C.markdown(C.compare(before, after, changed=True))
+    assert "**Simulated rooms, TP/det/GT at point IoU 0.25**" in text
+    assert "| class | before | after | P / R before | P / R after |" in text
+    assert "| --- | ---: | ---: | ---: | ---: |" in text
+    assert "| chair | 8/10/12 | 9/10/12 | 0.80 / 0.67 | 0.90 / 0.75 |" in text
+    assert "Stability: not in the second run" in text.splitlines()
+    # A cell holding a pipe does not break its row.
+    table = Table(title="t")
+    table.add_column("a")
+    table.add_row("x|y")
+    assert "| x\\|y |" in C.markdown([table])
+    # The command line prints the same, with both runs' settings first.
+    a, b = write(tmp_path, "a.json", before), write(tmp_path, "b.json", after)
+    assert C.main([str(a), str(b), "--changed", "--markdown"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith(f"before: {a} (room auto)")
+    assert "| chair | 8/10/12 | 9/10/12 | 0.80 / 0.67 | 0.90 / 0.75 |" in out
