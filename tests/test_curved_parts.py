@@ -9,6 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from _clusters import describe_points
 from ontodetect.config import Config
 from ontodetect.ontology import ClusterDescription, builtin_ontology, continuations
 from ontodetect.ontology._score import score_class
@@ -97,18 +98,7 @@ def _chair_with_bent_back(curved):
     pts = np.vstack([_seat(), _bent(12.0, z0=0.46)])
     planes = extract_planes(pts, threshold=0.004, max_planes=12, min_points=40, rng=0)
     patches = curved_patches(pts, planes, plane_relations(pts, planes), rng=0) if curved else []
-    everything = [*planes, *patches]
-    rels = {(r.i, r.j): r for r in plane_relations(pts, everything)}
-    span = pts.max(axis=0) - pts.min(axis=0)
-    desc = ClusterDescription(
-        planes=everything,
-        relations=rels,
-        length=float(max(span[:2])),
-        breadth=float(min(span[:2])),
-        height=float(pts[:, 2].max()),
-        bottom=0.0,
-    )
-    return planes, patches, desc
+    return planes, patches, describe_points(pts, [*planes, *patches])
 
 
 def test_a_chair_takes_its_bent_back_whole_and_no_strip_costs_as_clutter():

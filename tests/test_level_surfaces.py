@@ -9,8 +9,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from _clusters import describe_points
 from ontodetect.config import Config
-from ontodetect.ontology import ClusterDescription, builtin_ontology
+from ontodetect.ontology import builtin_ontology
 from ontodetect.ontology._score import score_class
 from ontodetect.segment.planes import (
     LEVEL_STEP,
@@ -45,17 +46,7 @@ def _description(pts, surfaces_on):
     planes = _planes(pts)
     rels = plane_relations(pts, planes)
     surfaces = level_surfaces(pts, planes, rels, rng=0) if surfaces_on else []
-    everything = [*planes, *surfaces]
-    span = pts.max(axis=0) - pts.min(axis=0)
-    desc = ClusterDescription(
-        planes=everything,
-        relations={(r.i, r.j): r for r in plane_relations(pts, everything)},
-        length=float(max(span[:2])),
-        breadth=float(min(span[:2])),
-        height=float(pts[:, 2].max()),
-        bottom=0.0,
-    )
-    return planes, surfaces, desc
+    return planes, surfaces, describe_points(pts, [*planes, *surfaces])
 
 
 def test_a_made_bed_is_one_lying_surface_measured_whole():
