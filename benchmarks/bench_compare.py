@@ -170,8 +170,6 @@ def _table(
 def _same(row: tuple[Any, ...]) -> bool:
     """A row is unchanged when its "before" and "after" cells agree pairwise."""
     values = row[1:]
-    if len(values) == 4:  # TP/det/GT before, after, P/R before, after
-        return values[0] == values[1]
     return all(values[i] == values[i + 1] for i in range(0, len(values) - 1, 2))
 
 

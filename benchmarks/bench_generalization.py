@@ -878,7 +878,7 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
     opts: dict[str, Any] = {"seed": args.seed, "room": _room_option(args.room)}
     if args.overrides:
         opts["config"] = Config().with_overrides(args.overrides)
-    if getattr(args, "ontology", None) is not None:
+    if args.ontology is not None:
         opts["ontology"] = args.ontology
     source = room_source(args.source)
     reporter = RichReporter() if err.is_terminal else None
@@ -889,9 +889,7 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
         "jobs": jobs,
         "seed": args.seed,
         "overrides": list(args.overrides),
-        "ontology": _ontology_record(
-            getattr(args, "ontologies", []), getattr(args, "ontology_only", False)
-        ),
+        "ontology": _ontology_record(args.ontologies, args.ontology_only),
         "room": args.room,
         "scene_source": dataclasses.asdict(source),
     }
