@@ -42,6 +42,41 @@ def test_the_builtin_roles_are_those_the_code_had():
     assert o.cad_above_seat("chair") == o.cad_above_seat("table") == 0.27  # BACK_ABOVE_SEAT
 
 
+def test_seed_sizes_are_the_seed_parts_height_length_and_width():
+    sizes = builtin_ontology().seed_sizes()
+    assert sorted(sizes) == ["seat", "top"]
+    assert len(sizes["seat"]) == 2 and len(sizes["top"]) == 1  # chair and sofa; table
+    assert all(set(p) == {"height", "length", "width"} for ps in sizes.values() for p in ps)
+    chair_seat = builtin_ontology()["chair"].part("seat").constraints
+    assert sizes["seat"][0]["length"] == chair_seat["length"]
+
+
+def test_a_patch_takes_its_seed_style_by_height_and_size(tmp_path):
+    from ontodetect.segment import seed_style
+
+    o = builtin_ontology()
+    styles, sizes = o.seed_styles(), o.seed_sizes()
+
+    def style(h, length, width):
+        return seed_style(h, styles, extent=(length, width), sizes=sizes).name
+
+    assert style(0.74, 2.4, 1.0) == "top"  # a conference top, too large for a chair's seat
+    assert style(0.74, 1.2, 0.6) == "top"  # an EN 527-1 desk
+    assert style(0.74, 0.45, 0.4) == "seat"  # a high chair's seat
+    assert style(0.45, 1.8, 0.6) == "seat"  # a sofa's joined cushions
+    assert style(0.45, 0.7, 0.6) == "seat"  # a club armchair's seat (within one sigma)
+    assert style(0.45, 4.5, 1.2) == "seat"  # nothing allows it: by height, as without sizes
+    assert style(0.9, 0.4, 0.3) == "top"  # above every seat, whatever its size
+    # A seed part that says nothing of its size allows any size.
+    f = tmp_path / "crate.yaml"
+    f.write_text(
+        HEAD + "classes:\n  crate:\n    parts:\n      lid: {seed: seat, height: {max: 0.8}}\n"
+    )
+    mine = load_ontology(f)
+    got = seed_style(0.78, mine.seed_styles(), extent=(3.0, 2.0), sizes=mine.seed_sizes())
+    assert got.name == "seat"
+
+
 def test_a_file_may_use_the_builtin_seed_styles_and_define_its_own(tmp_path):
     f = tmp_path / "mine.yaml"
     f.write_text(

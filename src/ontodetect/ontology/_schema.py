@@ -58,6 +58,8 @@ FORMAT = "ontodetect.ontology/1"
 #: What a part may tell CAD fitting (a part's ``cad``): the seat (its height and centre,
 #: and with the backrest the front), the backrest, the top.
 CAD_ROLES = ("seat", "back", "top")
+#: The features of a seed part that say what size of patch may seed in its style.
+SEED_SIZE = ("height", "length", "width")
 #: Factor used for a part that has no plane when the file does not say.
 DEFAULT_MISSING = {True: 0.02, False: 0.3}
 
@@ -364,6 +366,18 @@ class Ontology:
                     top = math.inf if span is None else span[1]
                     tops[p.seed] = max(tops.get(p.seed, -math.inf), top)
         return sorted(((self.seeds[k], v) for k, v in tops.items()), key=lambda t: t[1])
+
+    def seed_sizes(self) -> dict[str, tuple[Mapping[str, Gaussian], ...]]:
+        """For each seed style, the ``height``, ``length`` and ``width`` constraints of each
+        part that seeds in it: what a horizontal patch of that style may measure (see
+        ``cluster.seed_by_size`` and :func:`ontodetect.segment.seed_style`)."""
+        out: dict[str, list[Mapping[str, Gaussian]]] = {}
+        for c in self.classes:
+            for p in c.parts:
+                if p.seed is not None:
+                    size = {k: p.constraints[k] for k in SEED_SIZE if k in p.constraints}
+                    out.setdefault(p.seed, []).append(size)
+        return {k: tuple(v) for k, v in out.items()}
 
     def context_pairs(self) -> frozenset[tuple[str, str]]:
         """Pairs of class names (both orders) that the context term rewards together."""

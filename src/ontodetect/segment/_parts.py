@@ -33,7 +33,7 @@ beside it - within a short distance of its outline. So:
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -43,7 +43,7 @@ from scipy import ndimage, sparse
 from scipy.sparse.csgraph import connected_components, dijkstra
 from scipy.spatial import cKDTree
 
-from ..ontology import SeedStyle, builtin_ontology
+from ..ontology import Gaussian, SeedStyle, builtin_ontology
 from ._cluster import relabel
 
 __all__ = ["PartSeed", "horizontal_parts", "seed_style", "seeded_clusters"]
@@ -197,19 +197,44 @@ class PartSeed:
         }
 
 
-def seed_style(height: float, styles: Sequence[tuple[SeedStyle, float]] | None = None) -> SeedStyle:
+def seed_style(
+    height: float,
+    styles: Sequence[tuple[SeedStyle, float]] | None = None,
+    *,
+    extent: Sequence[float] | None = None,
+    sizes: Mapping[str, Sequence[Mapping[str, Gaussian]]] | None = None,
+) -> SeedStyle:
     """The seed style a horizontal part at ``height`` (m) takes: the first of ``styles``
     (``(style, highest height)``, lowest first: :meth:`Ontology.seed_styles`) whose height
     reaches it, the last when none does; ``styles`` defaults to the built-in ontology's.
+
+    With ``extent`` (the part's length and width, m) and ``sizes`` (each style's seed
+    parts' height, length and width constraints: :meth:`Ontology.seed_sizes`), the first
+    style whose height reaches it and one of whose seed parts allows its height, length
+    and width within one σ: a conference table's 2.4 × 1.0 m top at 0.74 m is no seat,
+    though seats reach 0.75 m (Table 4.1). When no style allows its size, by height alone.
 
     Examples
     --------
     >>> seed_style(0.46).name, seed_style(0.74).name, seed_style(0.8).name
     ('seat', 'seat', 'top')
+    >>> sizes = builtin_ontology().seed_sizes()
+    >>> seed_style(0.74, extent=(2.4, 1.0), sizes=sizes).name
+    'top'
+    >>> seed_style(0.74, extent=(0.5, 0.45), sizes=sizes).name  # a bar chair's seat
+    'seat'
     """
     styles = builtin_ontology().seed_styles() if styles is None else styles
     if not styles:
         raise ValueError("no seed styles: the ontology marks no part as a seed")
+    if extent is not None and sizes is not None:
+        measured = {"height": height, "length": extent[0], "width": extent[1]}
+        for style, top in styles:
+            if height <= top and any(
+                all(abs(float(g.z(measured[k]))) <= 1.0 for k, g in part.items())
+                for part in sizes.get(style.name, ())
+            ):
+                return style
     for style, top in styles:
         if height <= top:
             return style
@@ -230,7 +255,7 @@ def _outline(xy: NDArray[np.float64]):
     return center, axes, hi - lo
 
 
-def _seed(vox, centers, voxel_area, styles) -> PartSeed:
+def _seed(vox, centers, voxel_area, styles, sizes=None) -> PartSeed:
     vox = np.sort(vox).astype(np.int64)
     c, axes, ext = _outline(centers[vox, :2])
     height = float(np.median(centers[vox, 2]))
@@ -241,7 +266,7 @@ def _seed(vox, centers, voxel_area, styles) -> PartSeed:
         c,
         axes,
         ext,
-        style=seed_style(height, styles),
+        style=seed_style(height, styles, extent=ext, sizes=sizes),
     )
 
 
@@ -258,6 +283,7 @@ def horizontal_parts(
     voxel_area: float,
     variation: NDArray[np.float64] | None = None,
     styles: Sequence[tuple[SeedStyle, float]] | None = None,
+    sizes: Mapping[str, Sequence[Mapping[str, Gaussian]]] | None = None,
 ) -> list[PartSeed]:
     """Horizontal patches at part height, largest first.
 
@@ -289,6 +315,10 @@ def horizontal_parts(
         The ontology's seed styles (:meth:`~ontodetect.ontology.Ontology.seed_styles`),
         which say how each patch claims its object; the built-in ontology's by default.
         No styles, no seeds.
+    sizes : mapping, optional
+        Each style's seed parts' sizes (:meth:`~ontodetect.ontology.Ontology.seed_sizes`):
+        a patch takes its style by its height and size (:func:`seed_style`); ``None``: by
+        its height alone.
     """
     styles = builtin_ontology().seed_styles() if styles is None else list(styles)
     if not styles:
@@ -310,7 +340,7 @@ def horizontal_parts(
     patches = _groups(comp)
     # Patches at one height that (nearly) touch are one part: cushions of a sofa.
     patches = _merge_close(patches, centers)
-    seeds = [_seed(p, centers, voxel_area, styles) for p in patches]
+    seeds = [_seed(p, centers, voxel_area, styles, sizes) for p in patches]
     seeds = [s for s in seeds if s.area >= min_area and s.extent[1] >= min_width]
     seeds = _merge_armrests(seeds, centers, voxel_area, styles)
     seeds.sort(key=lambda s: (-s.area, int(s.voxels[0])))

@@ -487,6 +487,9 @@ def cluster(
                     voxel_area=voxel_area,
                     variation=part_variation,
                     styles=(ontology or builtin_ontology()).seed_styles(),
+                    sizes=(ontology or builtin_ontology()).seed_sizes()
+                    if cc.seed_by_size
+                    else None,
                 )
                 labels, seed_of = seeded_clusters(
                     centers,
