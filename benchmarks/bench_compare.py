@@ -8,7 +8,9 @@ by side, so that the note of a change can give all three:
 
 - real and simulated scans: TP / detections / ground truth, precision and recall per class;
 - simulated scans by room type: TP / detections per reported class;
-- the false detections by what they really are, and the chair groups' recall;
+- the false detections by what they really are, the objects missed by where they were
+  lost (not clustered, split, merged into another object's cluster, scored as another class,
+  lost in the vote), and the chair groups' recall;
 - stability: mean and worst, and per change of the scan.
 
 A part one of the runs did not measure (``--only``) is left out, and said so. Rows that did
@@ -27,6 +29,8 @@ from typing import Any
 
 from rich.console import Console
 from rich.table import Table
+
+from ._generalization import MISSED_CAUSES
 
 console = Console(highlight=False)
 err = Console(stderr=True, highlight=False)
@@ -133,6 +137,20 @@ def false_rows(
     return sorted(rows, key=lambda r: (-max(r[1], r[2]), r[0]))
 
 
+def missed_rows(before: Mapping[str, Any], after: Mapping[str, Any]) -> list[tuple[str, int, int]]:
+    """Per class, the objects missed before and after: the total, then each cause (where
+    the object was lost: ``missed_causes`` of the benchmark), in the benchmark's order."""
+    rows = []
+    for c in _ordered(list(before) + list(after)):
+        b, a = before.get(c, {}), after.get(c, {})
+        rows.append((f"{c}, all", int(b.get("total", 0)), int(a.get("total", 0))))
+        cb, ca = b.get("causes", {}), a.get("causes", {})
+        known = [k for k in MISSED_CAUSES if k in cb or k in ca]
+        for k in known + _ordered(k for k in (*cb, *ca) if k not in MISSED_CAUSES):
+            rows.append((f"{c}, {k}", int(cb.get(k, 0)), int(ca.get(k, 0))))
+    return rows
+
+
 def stability_rows(
     before: Mapping[str, Any], after: Mapping[str, Any]
 ) -> list[tuple[str, str, str]]:
@@ -219,6 +237,14 @@ def compare(
                     changed,
                 )
             )
+        out.append(
+            _table(
+                f"{title}: missed, by cause",
+                ["class, lost", "before", "after"],
+                missed_rows(b.get("missed", {}).get(key, {}), a.get("missed", {}).get(key, {})),
+                changed,
+            )
+        )
         out.append(
             _table(
                 f"{title}: what the false detections are",

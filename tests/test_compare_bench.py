@@ -21,7 +21,7 @@ def fig(tp, det, gt):
     }
 
 
-def run_doc(*, chairs=(8, 10, 12), wc_as_chair=2, mean=0.9, stability=True, real=True):
+def run_doc(*, chairs=(8, 10, 12), wc_as_chair=2, merged=2, mean=0.9, stability=True, real=True):
     key = "iou@0.25"
     doc = {
         "format": B.FORMAT,
@@ -36,6 +36,9 @@ def run_doc(*, chairs=(8, 10, 12), wc_as_chair=2, mean=0.9, stability=True, real
             "chair_groups": {key: {"easy chairs": {"found": 2, "gt": 3, "recall": 0.67}}},
             "false_detections": {
                 key: {"toilet": {"total": wc_as_chair, "as": {"chair": wc_as_chair}}}
+            },
+            "missed": {
+                key: {"chair": {"total": merged + 2, "causes": {"merged": merged, "scored": 2}}}
             },
         },
     }
@@ -92,6 +95,22 @@ def test_false_rows_come_most_frequent_first_with_what_they_were_taken_for():
     ]
 
 
+def test_missed_rows_give_each_class_total_then_its_causes_in_the_benchmarks_order():
+    before = {"chair": {"total": 5, "causes": {"scored": 3, "merged": 2}}}
+    after = {
+        "chair": {"total": 4, "causes": {"scored": 3, "odd": 1}},
+        "table": {"total": 1, "causes": {"vote": 1}},
+    }
+    assert C.missed_rows(before, after) == [
+        ("chair, all", 5, 4),
+        ("chair, merged", 2, 0),
+        ("chair, scored", 3, 3),
+        ("chair, odd", 0, 1),  # a cause the benchmark may add later comes last
+        ("table, all", 0, 1),
+        ("table, vote", 0, 1),
+    ]
+
+
 def test_stability_rows_give_mean_and_worst_per_change():
     before = {"mean": 0.9, "worst": 0.5, "per_transform": {"turn 90°": {"mean": 0.8, "worst": 0.5}}}
     after = {"mean": 0.95, "worst": 0.75, "per_transform": {}}
@@ -112,7 +131,7 @@ def test_compare_of_a_run_with_itself_changes_nothing():
 
 def test_compare_keeps_only_what_changed_and_says_what_a_run_lacks():
     before = run_doc()
-    after = run_doc(chairs=(9, 10, 12), wc_as_chair=0, mean=0.95, real=False)
+    after = run_doc(chairs=(9, 10, 12), wc_as_chair=0, merged=0, mean=0.95, real=False)
     items = C.compare(before, after, changed=True)
     text = [i for i in items if isinstance(i, str)]
     assert "Real scans: not in the second run" in text
@@ -123,6 +142,8 @@ def test_compare_keeps_only_what_changed_and_says_what_a_run_lacks():
     assert rooms == [["office", "8/10", "9/10"], ["bathroom", "0/2", "0/0"]]
     false = cells(tables["Simulated rooms: what the false detections are"])
     assert false == [["toilet", "2", "0", "chair 2", ""]]
+    missed = cells(tables["Simulated rooms: missed, by cause"])
+    assert missed == [["chair, all", "4", "2"], ["chair, merged", "2", "0"]]
     stab = cells(tables["Stability: detections that reappear, mean / worst"])
     assert stab == [
         ["all", "0.9000 / 0.5000", "0.9500 / 0.5000"],
