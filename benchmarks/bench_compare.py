@@ -31,6 +31,7 @@ from rich.console import Console
 from rich.table import Table
 
 from ._generalization import MISSED_CAUSES
+from .bench_generalization import THRESHOLDS
 
 console = Console(highlight=False)
 err = Console(stderr=True, highlight=False)
@@ -318,14 +319,15 @@ def main(argv: list[str] | None = None) -> int:
     )
     ap.add_argument("before", type=Path, help="generalization.json of the run before the change")
     ap.add_argument("after", type=Path, help="generalization.json of the run after it")
-    ap.add_argument("--iou", type=float, default=0.25, help="point IoU of the figures: 0.25 or 0.5")
+    ious = " or ".join(f"{t:g}" for t in THRESHOLDS.values())
+    ap.add_argument("--iou", type=float, default=0.25, help=f"point IoU of the figures: {ious}")
     ap.add_argument("--changed", action="store_true", help="print only the rows that changed")
     ap.add_argument(
         "--markdown", action="store_true", help="print Markdown tables (for a note or the docs)"
     )
     args = ap.parse_args(argv)
-    if args.iou not in (0.25, 0.5):
-        err.print(f"--iou must be 0.25 or 0.5, got {args.iou:g}", soft_wrap=True)
+    if _key(args.iou) not in THRESHOLDS:
+        err.print(f"--iou must be {ious}, got {args.iou:g}", soft_wrap=True)
         return 2
     try:
         before, after = load_run(args.before), load_run(args.after)

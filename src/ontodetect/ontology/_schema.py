@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
@@ -359,12 +359,10 @@ class Ontology:
         and the last one when none does (see ``docs/ontology.md``).
         """
         tops: dict[str, float] = {}
-        for c in self.classes:
-            for p in c.parts:
-                if p.seed is not None:
-                    span = p.height_span
-                    top = math.inf if span is None else span[1]
-                    tops[p.seed] = max(tops.get(p.seed, -math.inf), top)
+        for p in self._seed_parts():
+            span = p.height_span
+            top = math.inf if span is None else span[1]
+            tops[p.seed] = max(tops.get(p.seed, -math.inf), top)
         return sorted(((self.seeds[k], v) for k, v in tops.items()), key=lambda t: t[1])
 
     def seed_sizes(self) -> dict[str, tuple[Mapping[str, Gaussian], ...]]:
@@ -372,12 +370,14 @@ class Ontology:
         part that seeds in it: what a horizontal patch of that style may measure (see
         ``cluster.seed_by_size`` and :func:`ontodetect.segment.seed_style`)."""
         out: dict[str, list[Mapping[str, Gaussian]]] = {}
-        for c in self.classes:
-            for p in c.parts:
-                if p.seed is not None:
-                    size = {k: p.constraints[k] for k in SEED_SIZE if k in p.constraints}
-                    out.setdefault(p.seed, []).append(size)
+        for p in self._seed_parts():
+            size = {k: p.constraints[k] for k in SEED_SIZE if k in p.constraints}
+            out.setdefault(p.seed, []).append(size)
         return {k: tuple(v) for k, v in out.items()}
+
+    def _seed_parts(self) -> Iterator[Part]:
+        """Every part marked ``seed``, class by class."""
+        return (p for c in self.classes for p in c.parts if p.seed is not None)
 
     def context_pairs(self) -> frozenset[tuple[str, str]]:
         """Pairs of class names (both orders) that the context term rewards together."""

@@ -475,6 +475,7 @@ def cluster(
                 part_normals = np.tile([0.0, 0.0, 1.0], (len(centers), 1))
                 part_variation = np.full(len(centers), 1.0 / 3.0)
                 part_normals[band], part_variation[band] = graph_normals(centers[band], tight)
+                rules = ontology or builtin_ontology()
                 seeds = horizontal_parts(
                     centers,
                     part_normals,
@@ -486,10 +487,8 @@ def cluster(
                     min_width=cc.min_part_width,
                     voxel_area=voxel_area,
                     variation=part_variation,
-                    styles=(ontology or builtin_ontology()).seed_styles(),
-                    sizes=(ontology or builtin_ontology()).seed_sizes()
-                    if cc.seed_by_size
-                    else None,
+                    styles=rules.seed_styles(),
+                    sizes=rules.seed_sizes() if cc.seed_by_size else None,
                 )
                 labels, seed_of = seeded_clusters(
                     centers,
