@@ -60,6 +60,7 @@ def test_sigma_floors_are_those_calibration_used():
         "open_below": 0.03,
         "seen_below": 0.03,
         "covered": 0.03,
+        "sunk": 0.03,
         "behind": 0.02,
         "aside": 0.02,
         "across": 1.0,

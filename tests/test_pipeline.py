@@ -226,6 +226,35 @@ def test_covered_finds_a_top_over_a_shelf_and_nothing_over_an_armchairs_seat():
     assert level[(1, True)] == 0.0  # nor does anything stand over the arms
 
 
+@pytest.mark.parametrize("seed", [0, 1])
+def test_sunk_finds_a_basins_bowl_under_its_rim_and_nothing_under_a_table(seed):
+    """Inside a basin's rim its bowl lies 12-20 cm lower; inside a desk's, a table's or a
+    kitchen counter's top nothing of them does (legs, panels and aprons stand at the
+    edge). Tilted planes are not measured."""
+    from ontodetect.segment import segment, sunk_below
+    from ontodetect.synth.furniture import make_furniture
+    from ontodetect.synth.rooms import object_scene
+
+    kinds = ["sink-wall-hung", "sink-pedestal", "desk-pedestal", "table-dining", "kitchen-counter"]
+    shares = {}
+    for kind in kinds:
+        item = make_furniture(kind, seed, backsplash=True) if kind.startswith("sink") else kind
+        cloud, scene = object_scene([item], points=40_000, seed=seed)
+        seg = segment(cloud, seed=seed)
+        inst = np.asarray(cloud.fields["instance"])
+        (obj,) = (o.instance_id for o in scene.objects if o.kind == kind)
+        tops = [
+            share
+            for c, v in zip(seg, sunk_below(seg), strict=True)
+            if np.mean(inst[c.point_indices] == obj) > 0.5
+            for plane, share in _level_shares([c], [v])
+            if plane.height > 0.6 and plane.area > 0.1
+        ]
+        shares[kind] = max(tops)  # the rim or the top: the largest level plane up there
+    assert shares["sink-wall-hung"] > 0.5 and shares["sink-pedestal"] > 0.5, shares
+    assert max(shares[k] for k in kinds[2:]) < 0.2, shares
+
+
 def _rows(a, b):
     return np.arange(a, b, dtype=np.int64)
 

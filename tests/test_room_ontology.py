@@ -99,6 +99,18 @@ def test_the_example_easy_chair_class_takes_no_wc(seed):
     assert "chair" not in _covering(cloud, result, _instance(scene, "toilet"))
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", [0, 1, 2])
+@pytest.mark.parametrize("kind", ["sink-wall-hung", "sink-pedestal"])
+def test_a_basin_is_a_sink_by_its_sunk_bowl(kind, seed):
+    # The bowl is curved: MSAC fits its rim and seldom a plane in it, so the sink class,
+    # which asks for one, lost these to a chair (wall-hung, seed 1) and a stool (pedestal,
+    # seed 1). The basin class knows the bowl by what is sunk under the rim.
+    cloud, scene, result = _detections_on([kind], seed)
+    labels = _covering(cloud, result, _instance(scene, kind))
+    assert labels and set(labels) == {"sink"}, labels
+
+
 def test_classes_all_reports_the_competing_classes():
     cloud, _, result = _detections_on(["toilet", "sink-pedestal"], 0)
     found = {d.label for d in result.detections}

@@ -153,3 +153,26 @@ def test_detect_records_the_floor_area_it_used():
     length, width = scan.scene.size[:2]
     assert env["floor_area"] == pytest.approx(length * width, rel=0.25)
     assert max(env["rooms"], key=env["rooms"].get) == "bathroom"
+
+
+def test_a_found_object_is_evidence_by_every_class_of_its_label():
+    """A basin and a sink are one thing described two ways (both labelled sink), as are a
+    table and a side table: the room estimate weighs the label, not the class the labelling
+    happened to pick, so a second class of a label cannot dilute its evidence."""
+    from ontodetect.labeling import LabelChoice
+    from ontodetect.ontology import ClusterScores, builtin_ontology, rooms_from_objects
+    from ontodetect.pipeline._detect import _found_objects
+
+    onto = builtin_ontology()
+
+    def scored(name, probs):
+        choice = LabelChoice(onto[name].label, {}, extra={"class": name})
+        return choice, ClusterScores({}, probs, name)
+
+    sink = scored("basin", {"basin": 0.5, "sink": 0.3, "table": 0.1, "none": 0.1})
+    table = scored("table", {"table": 0.5, "side_table": 0.3, "chair": 0.1, "none": 0.1})
+    unlabelled = (LabelChoice(None, {}), ClusterScores({}, {"none": 1.0}, "none"))
+    found = _found_objects(*zip(sink, table, unlabelled, strict=True), onto)
+    assert found == [{"basin": 0.5, "sink": 0.3}, {"table": 0.5, "side_table": 0.3}]
+    both = rooms_from_objects(found[:1], onto)["bathroom"]
+    assert both > rooms_from_objects([{"basin": 0.5}], onto)["bathroom"]

@@ -326,6 +326,12 @@ for _feature in (
     Feature("covered", "part", "Pr",
             "share of a horizontal plane's outline over which a higher horizontal plane of "
             "the cluster was seen (0..1)", 0.03, scene=True),
+    # A basin's bowl is sunk in its rim; a table's top is a plate over knee space and a
+    # cabinet's is closed. Measured by detect from the cluster's points, so a curved bowl
+    # that makes no plane still counts.
+    Feature("sunk", "part", "Pr",
+            "share of a horizontal plane's outline over which the cluster lies 4-25 cm "
+            "under it (0..1)", 0.03, scene=True),
     Feature("angle", "relation", "Pr", "angle between the normals, folded to [0, 90] degrees",
             2.0, relation=_relation_attribute("angle", 0.0)),
     Feature("distance", "relation", "Pr",

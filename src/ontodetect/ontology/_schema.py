@@ -327,7 +327,7 @@ class Ontology:
         >>> onto["toilet"].detect, builtin_ontology()["toilet"].detect
         (True, False)
         >>> [c.name for c in builtin_ontology().reporting("chair,sink").classes if c.detect]
-        ['chair', 'sink']
+        ['chair', 'sink', 'basin']
         """
         if isinstance(classes, str):
             if classes == "reported":

@@ -246,16 +246,25 @@ def _environment_given(
 
 
 def _found_objects(
-    choices: Sequence[LabelChoice], scores: Sequence[ClusterScores]
+    choices: Sequence[LabelChoice], scores: Sequence[ClusterScores], ontology: Ontology
 ) -> list[dict[str, float]]:
-    """What a labelling found, every class competing: for each labelled cluster, the class
-    it was labelled with and that class's probability. (Not the whole posterior: a dozen
+    """What a labelling found, every class competing: for each labelled cluster, the
+    classes of the label it was given (a table or a side table, a sink or a basin: one
+    thing described two ways) and their probabilities. (Not the whole posterior: a dozen
     chairs that each look a little like a WC are a dozen chairs, not a bathroom.)"""
     out = []
     for choice, score in zip(choices, scores):
         name = choice.extra.get("class")
-        if name is not None:
-            out.append({name: float(score.probabilities.get(name, 0.0))})
+        if name is None:
+            continue
+        label = ontology[name].label if name in ontology else name
+        out.append(
+            {
+                c: float(p)
+                for c, p in score.probabilities.items()
+                if c == name or (c in ontology and ontology[c].label == label)
+            }
+        )
     return out
 
 
@@ -319,7 +328,7 @@ def _room_pass(
     shape, area_seen = (
         _room_shape(first[0], scan, shared.viewpoint) if config.detect.room_shape else (None, {})
     )
-    found = _found_objects(first[2], first[1])
+    found = _found_objects(first[2], first[1], shared.ontology)
     rooms = rooms_from_objects(found, shared.ontology, shape=shape)
     if scene_rooms is not None:
         from ..environment import combine_room_priors  # lazy: only with photographs

@@ -38,6 +38,7 @@ from ._measure import (
     open_below,
     seen_below,
     shelter_heights,
+    sunk_below,
 )
 from ._parts import PartSeed, horizontal_parts, seed_style, seeded_clusters
 from ._segmentation import (
@@ -88,5 +89,6 @@ __all__ = [
     "seen_below",
     "segment",
     "shelter_heights",
+    "sunk_below",
     "upright_box",
 ]

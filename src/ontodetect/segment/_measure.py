@@ -1,8 +1,9 @@
 """Scene measurements the ontology's scoring needs beyond a cluster's own planes: what
 stands beside a cluster (:func:`shelter_heights`), what it hides from a single view
-(:func:`hidden_heights`), whether the floor shows under its tops (:func:`open_below`) and
-whether a lower surface of the cluster shows inside a top's outline (:func:`seen_below`);
-:func:`describe_clusters` gathers them into the scoring's input.
+(:func:`hidden_heights`), whether the floor shows under its tops (:func:`open_below`),
+whether a lower surface of the cluster shows inside a top's outline (:func:`seen_below`)
+and whether something of it is sunk just under a top, as a basin's bowl is under its rim
+(:func:`sunk_below`); :func:`describe_clusters` gathers them into the scoring's input.
 """
 
 from __future__ import annotations
@@ -31,6 +32,8 @@ __all__ = [
     "SELF_SHADOW_DISTANCE",
     "SHELTER_AREA",
     "SHELTER_GAP",
+    "SUNK_DEPTH",
+    "SUNK_RIM",
     "covered_above",
     "describe_cluster",
     "describe_clusters",
@@ -38,6 +41,7 @@ __all__ = [
     "open_below",
     "seen_below",
     "shelter_heights",
+    "sunk_below",
 ]
 
 
@@ -49,11 +53,13 @@ def describe_cluster(
     open_below: Sequence[float] | None = None,
     seen_below: Sequence[float] | None = None,
     covered: Sequence[float] | None = None,
+    sunk: Sequence[float] | None = None,
 ) -> ClusterDescription:
     """What the ontology scoring needs to know about a cluster (``shelter``: see
     :func:`shelter_heights`; ``ceiling``: the top of the search volume;
     ``hidden_below``: see :func:`hidden_heights`; ``open_below``: see
-    :func:`open_below`; ``seen_below``: see :func:`seen_below`)."""
+    :func:`open_below`; ``seen_below``, ``covered`` and ``sunk``: see :func:`seen_below`,
+    :func:`covered_above` and :func:`sunk_below`)."""
     return ClusterDescription(
         planes=cluster.scored_planes,
         relations=cluster.scored_relations,
@@ -67,7 +73,11 @@ def describe_cluster(
         open_below=open_below,
         scene={
             name: values
-            for name, values in (("seen_below", seen_below), ("covered", covered))
+            for name, values in (
+                ("seen_below", seen_below),
+                ("covered", covered),
+                ("sunk", sunk),
+            )
             if values is not None
         },
     )
@@ -95,10 +105,12 @@ def describe_clusters(
         )
     # From one view the floor under a top is hidden by the top itself: not measured there.
     below = open_below(seg) if viewpoint is None else [None] * len(seg)
-    lower, higher = _outline_shares(seg, (-1, 1))  # seen_below, covered_above
+    lower, higher, sunk = _outline_shares(seg, (-1, 1), sunk=True)
     return [
-        describe_cluster(c, float(h), ceiling, float(b), o, s, a)
-        for c, h, b, o, s, a in zip(seg, shelter_heights(seg), hidden, below, lower, higher)
+        describe_cluster(c, float(h), ceiling, float(b), o, s, a, k)
+        for c, h, b, o, s, a, k in zip(
+            seg, shelter_heights(seg), hidden, below, lower, higher, sunk, strict=True
+        )
     ]
 
 
@@ -121,6 +133,19 @@ def _pack(ij: NDArray[np.int64]) -> NDArray[np.int64]:
 def _cell_keys(xy: NDArray[np.float64], cell: float) -> NDArray[np.int64]:
     """One integer per ``cell`` cell of the points ``xy``."""
     return _pack(np.floor(xy / cell).astype(np.int64))
+
+
+def _shrink(cells: NDArray[np.int64], rings: int) -> NDArray[np.int64]:
+    """The packed grid ``cells`` less ``rings`` rings at their rim: those whose four
+    neighbours are all in, ring by ring (fewer rings when nothing would be left)."""
+    for _ in range(rings):
+        inner = cells
+        for step in ((1 << 32), -(1 << 32), 1, -1):
+            inner = inner[np.isin(inner + step, cells)]
+        if not len(inner):
+            break
+        cells = inner
+    return cells
 
 
 def open_below(seg: Segmentation) -> list[list[float]]:
@@ -148,13 +173,7 @@ def open_below(seg: Segmentation) -> list[list[float]]:
                 values.append(math.nan)
                 continue
             use = np.unique(_cell_keys(centers[plane.inliers, :2], FLOOR_CELL))
-            for _ in range(OPEN_BELOW_RIM):
-                inner = use
-                for step in ((1 << 32), -(1 << 32), 1, -1):
-                    inner = inner[np.isin(inner + step, use)]
-                if not len(inner):
-                    break
-                use = inner
+            use = _shrink(use, OPEN_BELOW_RIM)
             values.append(float(np.isin(use, seen).mean()))
         out.append(values)
     return out
@@ -187,21 +206,68 @@ def _cells_inside(xy: NDArray[np.float64]) -> NDArray[np.int64]:
     return np.union1d(_pack(inside), own)
 
 
-def _outline_shares(seg: Segmentation, signs: Sequence[int]) -> list[list[list[float]]]:
+#: A basin's bowl is sunk 120-200 mm under its rim (catalogue washbasins and kitchen
+#: sinks; EN 31 and EN 695 give their fixing dimensions, catalogues the bowl depths):
+#: what lies this far (m) under a top, inside its outline, is sunk in it. The upper bound
+#: is the deepest bowl and a few centimetres of scatter; the lower one clears the top's
+#: own thickness and the scatter of its points.
+SUNK_DEPTH = (0.04, 0.25)
+#: Rings of ``SEEN_BELOW_CELL`` cells left out at the rim of a top's outline, where a
+#: table's apron and a cabinet's front drop from its edge.
+SUNK_RIM = 1
+
+
+def _sunk_share(
+    centers: NDArray[np.float64],
+    z: float,
+    outline: NDArray[np.int64] | None,
+    inliers: Any,
+    boards: NDArray[np.bool_],
+) -> tuple[float, NDArray[np.int64] | None]:
+    """:func:`sunk_below` for one plane at height ``z`` (``boards``: the cluster's points on
+    its level planes, left out); the outline, worked out when first needed, comes back for
+    the next measure."""
+    lo, hi = SUNK_DEPTH
+    depth = z - centers[:, 2]
+    under = centers[(depth >= lo) & (depth <= hi) & ~boards, :2]
+    if not len(under):
+        return 0.0, outline
+    if outline is None:
+        outline = _cells_inside(centers[inliers, :2])
+    inner = _shrink(outline, SUNK_RIM)
+    cells = np.unique(_cell_keys(under, SEEN_BELOW_CELL))
+    return float(np.isin(inner, cells).mean()), outline
+
+
+def _outline_shares(
+    seg: Segmentation, signs: Sequence[int], *, sunk: bool = False
+) -> list[list[list[float]]]:
     """For each ``sign`` in ``signs``, per cluster and plane, the share of a horizontal
     plane's outline over which another horizontal plane of the cluster was seen, lower
     (``sign`` -1) or higher (+1) by at least ``SEEN_BELOW_DROP``; NaN for tilted planes.
-    Each plane's outline is worked out once for all signs."""
-    out: list[list[list[float]]] = [[] for _ in signs]
+    With ``sunk``, :func:`sunk_below` after them. Each plane's outline is worked out once
+    for all."""
+    out: list[list[list[float]]] = [[] for _ in range(len(signs) + sunk)]
     for c in seg:
         centers = np.asarray(c.centers)
         planes = c.scored_planes
         flat = [float(p.tilt) <= HORIZONTAL_TILT for p in planes]
-        values: list[list[float]] = [[] for _ in signs]
+        values: list[list[float]] = [[] for _ in out]
+        boards = np.zeros(len(centers), dtype=bool)
+        if sunk:
+            for i, plane in enumerate(planes):
+                if flat[i]:
+                    boards[np.asarray(plane.inliers)] = True
         for i, plane in enumerate(planes):
             outline = None
             z = float(plane.centroid[2])
-            for sign, row in zip(signs, values, strict=True):
+            if sunk:
+                if flat[i]:
+                    share, outline = _sunk_share(centers, z, outline, plane.inliers, boards)
+                    values[-1].append(share)
+                else:
+                    values[-1].append(math.nan)
+            for sign, row in zip(signs, values, strict=False):
                 if not flat[i]:
                     row.append(math.nan)
                     continue
@@ -234,6 +300,22 @@ def seen_below(seg: Segmentation) -> list[list[float]]:
     ``SEEN_BELOW_DROP`` lower.
     """
     return _outline_shares(seg, (-1,))[0]
+
+
+def sunk_below(seg: Segmentation) -> list[list[float]]:
+    """Per cluster and plane, the share of a horizontal plane's outline (the convex hull of
+    its points on a ``SEEN_BELOW_CELL`` grid, less ``SUNK_RIM`` rings at its rim) over
+    which points of the same cluster lie ``SUNK_DEPTH`` under it (0..1), those on the
+    cluster's level planes left out; NaN for tilted planes.
+
+    A basin's bowl is sunk in its rim: inside the rim's outline the cluster goes on
+    12-20 cm lower, over most of it. A table's top is a plate over knee space (legs and
+    apron stand at its edge), and a cabinet's top is closed: inside their outlines
+    nothing of them shows just under the top. A board under a top (a desk's tray or
+    shelf) is level and makes a plane, which :func:`seen_below` measures; a
+    bowl is curved and seldom makes one, so this counts what no level plane holds.
+    """
+    return _outline_shares(seg, (), sunk=True)[0]
 
 
 def covered_above(seg: Segmentation) -> list[list[float]]:
