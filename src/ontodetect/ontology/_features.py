@@ -331,7 +331,7 @@ for _feature in (
     # that makes no plane still counts.
     Feature("sunk", "part", "Pr",
             "share of a horizontal plane's outline over which the cluster lies 4-25 cm "
-            "under it (0..1)", 0.03, scene=True),
+            "under it, its level planes left out (0..1)", 0.03, scene=True),
     Feature("angle", "relation", "Pr", "angle between the normals, folded to [0, 90] degrees",
             2.0, relation=_relation_attribute("angle", 0.0)),
     Feature("distance", "relation", "Pr",
