@@ -8,8 +8,10 @@ and whether something of it is sunk just under a top, as a basin's bowl is under
 
 from __future__ import annotations
 
+import functools
+import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -220,23 +222,19 @@ SUNK_RIM = 1
 def _sunk_share(
     centers: NDArray[np.float64],
     z: float,
-    outline: NDArray[np.int64] | None,
-    inliers: Any,
+    outline: Callable[[], NDArray[np.int64]],
     boards: NDArray[np.bool_],
-) -> tuple[float, NDArray[np.int64] | None]:
-    """:func:`sunk_below` for one plane at height ``z`` (``boards``: the cluster's points on
-    its level planes, left out); the outline, worked out when first needed, comes back for
-    the next measure."""
+) -> float:
+    """:func:`sunk_below` for one plane at height ``z`` (``outline``: its cells, worked out
+    when first asked for; ``boards``: the cluster's points on its level planes, left out)."""
     lo, hi = SUNK_DEPTH
     depth = z - centers[:, 2]
     under = centers[(depth >= lo) & (depth <= hi) & ~boards, :2]
     if not len(under):
-        return 0.0, outline
-    if outline is None:
-        outline = _cells_inside(centers[inliers, :2])
-    inner = _shrink(outline, SUNK_RIM)
+        return 0.0
+    inner = _shrink(outline(), SUNK_RIM)
     cells = np.unique(_cell_keys(under, SEEN_BELOW_CELL))
-    return float(np.isin(inner, cells).mean()), outline
+    return float(np.isin(inner, cells).mean())
 
 
 def _outline_shares(
@@ -246,31 +244,24 @@ def _outline_shares(
     plane's outline over which another horizontal plane of the cluster was seen, lower
     (``sign`` -1) or higher (+1) by at least ``SEEN_BELOW_DROP``; NaN for tilted planes.
     With ``sunk``, :func:`sunk_below` after them. Each plane's outline is worked out once
-    for all."""
+    for all, and only when one of them needs it."""
     out: list[list[list[float]]] = [[] for _ in range(len(signs) + sunk)]
     for c in seg:
         centers = np.asarray(c.centers)
         planes = c.scored_planes
         flat = [float(p.tilt) <= HORIZONTAL_TILT for p in planes]
-        values: list[list[float]] = [[] for _ in out]
         boards = np.zeros(len(centers), dtype=bool)
-        if sunk:
-            for i, plane in enumerate(planes):
-                if flat[i]:
-                    boards[np.asarray(plane.inliers)] = True
+        for plane in itertools.compress(planes, flat):
+            boards[np.asarray(plane.inliers)] = True
+        values: list[list[float]] = [[] for _ in out]
         for i, plane in enumerate(planes):
-            outline = None
-            z = float(plane.centroid[2])
-            if sunk:
-                if flat[i]:
-                    share, outline = _sunk_share(centers, z, outline, plane.inliers, boards)
-                    values[-1].append(share)
-                else:
-                    values[-1].append(math.nan)
-            for sign, row in zip(signs, values, strict=False):
-                if not flat[i]:
+            if not flat[i]:
+                for row in values:
                     row.append(math.nan)
-                    continue
+                continue
+            outline = functools.cache(functools.partial(_cells_inside, centers[plane.inliers, :2]))
+            z = float(plane.centroid[2])
+            for sign, row in zip(signs, values, strict=False):  # the sunk row, if any, is last
                 others = [
                     q
                     for k, q in enumerate(planes)
@@ -279,10 +270,10 @@ def _outline_shares(
                 if not others:
                     row.append(0.0)
                     continue
-                if outline is None:
-                    outline = _cells_inside(centers[plane.inliers, :2])
                 cells = [_cell_keys(centers[q.inliers, :2], SEEN_BELOW_CELL) for q in others]
-                row.append(float(np.isin(outline, np.unique(np.concatenate(cells))).mean()))
+                row.append(float(np.isin(outline(), np.unique(np.concatenate(cells))).mean()))
+            if sunk:
+                values[-1].append(_sunk_share(centers, z, outline, boards))
         for rows, row in zip(out, values, strict=True):
             rows.append(row)
     return out
