@@ -260,6 +260,16 @@ class PrepareConfig(_Section):
     smoothing: bool = _param(
         False, Boolean(), "Project voxel centres on local planes (less scatter on planes)."
     )
+    # A surface whose points scatter by sigma keeps erf(t / (sigma sqrt 2)) of them within
+    # MSAC's inlier distance t: under 75 % once sigma > t / 1.15, and planes then break into
+    # strips. Measured on real scans with Gaussian noise added (docs/benchmarks.md, "Noise
+    # on the surfaces"): smoothing loses chairs at 5-7 mm and wins them back at 1 cm.
+    auto_smoothing: bool = _param(
+        True,
+        Boolean(),
+        "Smooth as 'smoothing' does when the floor scatters so much that more than a "
+        "quarter of a plane's points fall outside the plane inlier distance.",
+    )
     depth_smoothing: bool = _param(
         True,
         Boolean(),

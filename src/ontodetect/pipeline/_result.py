@@ -145,10 +145,12 @@ class Result:
     @property
     def frame(self) -> dict[str, Any]:
         prep = self.segmentation.prepared
+        scatter = prep.info.get("floor_scatter")
         return {
             "up": [round(float(v), 6) for v in prep.up],
             "ground_z": round(float(prep.floor_z), 6),
             "scale": round(float(prep.scale), 9),
+            "floor_scatter": None if scatter is None else round(float(scatter), 5),
         }
 
     def to_dict(self) -> dict[str, Any]:

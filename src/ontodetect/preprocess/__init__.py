@@ -10,7 +10,9 @@
 3. gravity and ground (:func:`estimate_up`, :func:`find_floor`, :func:`level_transform`):
    the cloud is rotated so that z is up and translated so that the floor is at z = 0;
 4. voxel grid average (:func:`voxelize`) with a map from every input point to its voxel;
-5. optional planar smoothing (:func:`smooth_surface`);
+5. planar smoothing (:func:`smooth_surface`), on request, or when the floor scatters so much
+   (:func:`surface_scatter`) that more than a quarter of a plane's points would fall outside
+   the plane inlier distance;
 6. floor, walls and ceiling (:func:`find_structure`), kept apart from objects, and the
    altitude cut-off.
 
@@ -60,7 +62,7 @@ from ._reconstruct import (
     scene_surface,
 )
 from ._structure import STRUCTURE_LABELS, StructurePlane, find_structure, floor_area
-from ._surface import estimate_normals, graph_normals, smooth_surface
+from ._surface import estimate_normals, graph_normals, smooth_surface, surface_scatter
 from ._voxel import VoxelGrid, grouped_covariance, voxelize
 
 __all__ = [
@@ -105,6 +107,7 @@ __all__ = [
     "smooth_depth",
     "smooth_surface",
     "statistical_outlier_mask",
+    "surface_scatter",
     "surface_spacing",
     "voxelize",
 ]

@@ -42,7 +42,7 @@ from ._gravity import (
     level_transform,
 )
 from ._structure import StructurePlane, find_structure
-from ._surface import smooth_surface
+from ._surface import smooth_surface, surface_scatter
 from ._voxel import VoxelGrid, voxelize
 
 __all__ = [
@@ -78,6 +78,10 @@ CENTIMETRE = 1e-2
 #: A rotation closer to the identity than this (Frobenius norm) is no rotation: the grid
 #: computed before levelling is reused.
 IDENTITY_TOLERANCE = 1e-12
+#: Gaussian scatter sigma keeps 75 % of a plane's points within the inlier distance t when
+#: t / sigma = 1.15 (erf(1.15 / sqrt 2) = 0.75): above sigma = t / 1.15 more than a quarter
+#: fall outside, and ``prepare.auto_smoothing`` projects the voxels on their planes first.
+QUARTER_OUTSIDE = 1.15
 #: Outliers are sought on a grid this many times coarser than the voxels: a speck of noise
 #: is as isolated there, and the neighbour search costs a quarter.
 DENOISE_GRID_FACTOR = 2.0
@@ -644,7 +648,18 @@ def prepare(
             grid.counts,
             grid.point_to_voxel,
         )
-    if cfg.smoothing:
+    # The sensor's noise as the scan kept it, measured where the surface is known flat.
+    floor_scatter = None
+    if floor.found:
+        z = grid.centers[:, 2]
+        floor_scatter = surface_scatter(grid.centers[np.abs(z) < cfg.floor_band])
+    inlier = (config or Config()).planes.threshold
+    smoothed = cfg.smoothing or (
+        cfg.auto_smoothing
+        and floor_scatter is not None
+        and floor_scatter > inlier / QUARTER_OUTSIDE
+    )
+    if smoothed:
         grid = VoxelGrid(
             grid.size,
             grid.origin,
@@ -712,6 +727,8 @@ def prepare(
             "floor_area": float(floor.area),
             "cell": float(cell),
             "floor_warp": 0.0 if floor_map is None else floor_map.warp,
+            "floor_scatter": floor_scatter,
+            "smoothed": smoothed,
             "timings": clock.laps,
         },
     )

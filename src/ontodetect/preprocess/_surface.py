@@ -8,15 +8,23 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._up import cell_index, grouped_covariance
 from ..config import Interval, check_param
 from ..geometry import as_points
 
-__all__ = ["estimate_normals", "graph_normals", "smooth_surface"]
+__all__ = ["estimate_normals", "graph_normals", "smooth_surface", "surface_scatter"]
 
 #: A neighbourhood is planar when its smallest eigenvalue is below this share of the sum.
 PLANAR_RATIO = 0.05
 #: Neighbourhoods are processed in blocks of this many points to bound memory.
 BLOCK = 200_000
+#: :func:`surface_scatter`: cell edge (m) of the local planes, and the fewest points a cell
+#: needs for its plane to count. A quarter metre follows a floor's warp (reconstructions
+#: bend by centimetres over metres) while holding enough points of a 50,000-point room.
+SCATTER_CELL = 0.25
+SCATTER_MIN_POINTS = 10
+#: Median absolute deviation to standard deviation, for Gaussian scatter.
+MAD_TO_STD = 1.4826
 
 
 def _local_frames(pts: NDArray[np.float64], neighbors: int):
@@ -180,3 +188,53 @@ def smooth_surface(points: ArrayLike, neighbors: int = 12) -> NDArray[np.float64
     out = pts.copy()
     out[planar] -= shift[planar, None] * normals[planar]
     return out
+
+
+def surface_scatter(
+    points: ArrayLike, cell: float = SCATTER_CELL, min_points: int = SCATTER_MIN_POINTS
+) -> float | None:
+    """How far the points of a surface scatter about it (m): a robust standard deviation.
+
+    The points are binned in cells of edge ``cell``; in every cell holding at least
+    ``min_points`` of them a plane is fitted, and the cell's scatter is ``1.4826 ·`` the
+    median absolute distance of its points to that plane (the standard deviation, for
+    Gaussian noise, which a few points of clutter do not move). The surface's scatter is
+    the median over the cells: cells that hold two layers (a floor registered twice, a rug,
+    a step) scatter more, and may be up to half of them. On the floor of a scan it
+    is the sensor's noise as the scan kept it: 2-5 mm on ScanNet's reconstructed rooms,
+    about 1 cm on a depth frame seen from 2-3 m.
+
+    Returns
+    -------
+    float or None
+        ``None`` when no cell holds ``min_points`` points.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> floor = np.c_[rng.random((20000, 2)) * 4, rng.normal(0.0, 0.004, 20000)]
+    >>> round(surface_scatter(floor), 3)
+    0.004
+    >>> surface_scatter(floor[:5]) is None
+    True
+    """
+    pts = as_points(points, "points")
+    if len(pts) < min_points:
+        return None
+    groups, num = cell_index(pts, cell)
+    means, cov, counts = grouped_covariance(pts, groups, num)
+    kept = counts >= min_points
+    if not kept.any():
+        return None
+    normals = np.linalg.eigh(cov[kept])[1][:, :, 0]
+    slot = np.full(num, -1)
+    slot[kept] = np.arange(int(kept.sum()))
+    rows = np.flatnonzero(kept[groups])
+    cells = slot[groups[rows]]
+    dist = np.abs(((pts[rows] - means[groups[rows]]) * normals[cells]).sum(axis=1))
+    order = np.lexsort((dist, cells))
+    starts = np.searchsorted(cells[order], np.arange(len(normals)))
+    sizes = counts[kept]
+    medians = 0.5 * (dist[order][starts + (sizes - 1) // 2] + dist[order][starts + sizes // 2])
+    return float(MAD_TO_STD * np.median(medians))
