@@ -26,6 +26,8 @@ def test_detect_writes_the_contract(scene, tmp_path, capsys):
     assert doc["source"].endswith("cloud.ply")
     assert doc["num_points"] == len(cloud)
     assert doc["frame"]["up"] == pytest.approx([0, 0, 1], abs=1e-6)
+    # A simulated RGB-D walk fused on a grid: millimetres of scatter, not a centimetre.
+    assert 0.001 < doc["frame"]["floor_scatter"] < 0.0087
     assert doc["detections"], "a dining room has chairs and a table"
     ids = [d["id"] for d in doc["detections"]]
     assert ids == list(range(1, len(ids) + 1))

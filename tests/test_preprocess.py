@@ -6,6 +6,8 @@ import warnings
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 from ontodetect import DataWarning, point_cloud
@@ -28,6 +30,7 @@ from ontodetect.preprocess import (
     scale_from_travel,
     smooth_surface,
     statistical_outlier_mask,
+    surface_scatter,
     voxelize,
 )
 
@@ -465,6 +468,52 @@ def test_normals_and_smoothing(rng):
     assert np.mean(normals[:, 2] > 0.95) > 0.95
     smooth = smooth_surface(plane, 16)
     assert smooth[:, 2].std() < 0.5 * plane[:, 2].std()
+
+
+@pytest.mark.parametrize("sigma", [0.002, 0.006, 0.012])
+def test_surface_scatter_is_the_noise_of_a_flat_floor(sigma):
+    rng = np.random.default_rng(3)
+    floor = rect(rng, (0, 0, 0), (4, 0, 0), (0, 3, 0), 0.03, noise=0.0)
+    noisy = floor + np.c_[np.zeros((len(floor), 2)), rng.normal(0, sigma, len(floor))]
+    assert surface_scatter(noisy) == pytest.approx(sigma, rel=0.15)
+
+
+def test_surface_scatter_ignores_a_floor_registered_twice_over_a_third_of_it():
+    # A SLAM map that closed its loop late keeps a copy of part of the floor a few cm up:
+    # the cells holding both layers scatter more, the median cell does not.
+    rng = np.random.default_rng(4)
+    floor = rect(rng, (0, 0, 0), (4, 0, 0), (0, 3, 0), 0.03, noise=0.003)
+    copy = rect(rng, (0, 0, 0.05), (4, 0, 0), (0, 1, 0), 0.03, noise=0.003)
+    assert surface_scatter(np.vstack([floor, copy])) == pytest.approx(0.003, rel=0.25)
+    assert surface_scatter(floor[:5]) is None
+
+
+@given(st.floats(-1e3, 1e3), st.floats(-1e3, 1e3), st.floats(-5.0, 5.0))
+def test_surface_scatter_does_not_depend_on_where_the_floor_lies(dx, dy, dz):
+    rng = np.random.default_rng(5)
+    floor = rect(rng, (0, 0, 0), (2, 0, 0), (0, 2, 0), 0.03, noise=0.005)
+    moved = surface_scatter(floor + [dx, dy, dz])
+    assert moved == pytest.approx(surface_scatter(floor), rel=1e-3)
+
+
+@pytest.mark.parametrize(
+    ("sigma", "settings", "smoothed"),
+    [
+        (0.003, [], False),
+        (0.014, [], True),
+        (0.014, ["prepare.auto_smoothing=false"], False),
+        (0.003, ["prepare.smoothing=true"], True),
+    ],
+)
+def test_a_scan_as_noisy_as_the_inlier_distance_is_smoothed(sigma, settings, smoothed):
+    # 1.4 cm of scatter leaves 52 % of a plane's points within the 1 cm inlier distance,
+    # 3 mm leaves all of them.
+    rng = np.random.default_rng(6)
+    pts, _ = room(rng)
+    noisy = pts + rng.normal(0, sigma, pts.shape)
+    scene = prepare(noisy, config=Config().with_overrides(settings))
+    assert scene.info["floor_scatter"] == pytest.approx(sigma, rel=0.25)
+    assert scene.info["smoothed"] is smoothed
 
 
 def test_turn_rotates_the_levelled_frame_only(rng):

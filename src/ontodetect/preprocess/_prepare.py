@@ -348,6 +348,10 @@ class Ground:
         The floor plane (its normal is the up direction).
     laps : dict
         Seconds per step.
+    floor_scatter : float or None
+        How far the floor's voxels scatter about their local planes (m,
+        :func:`~ontodetect.preprocess.surface_scatter`): the sensor's noise as the scan kept
+        it, one figure for every pass of a vote. ``None`` without a floor.
     origin : (3,) float
         The local origin (:func:`local_origin`) subtracted from the input before all of
         the above, which are in that local frame; zeros for most scans.
@@ -365,6 +369,7 @@ class Ground:
     floor: FloorFit
     laps: dict[str, float] = field(default_factory=dict)
     origin: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
+    floor_scatter: float | None = None
 
 
 @dataclass(frozen=True)
@@ -507,6 +512,12 @@ def find_ground(
         and np.degrees(np.arccos(min(1.0, abs(float(floor.normal @ u))))) < LEVEL_MIN_ANGLE
     ):
         floor = FloorFit(u, floor.offset, floor.area, floor.found)
+    # The sensor's noise as the scan kept it, measured where the surface is known flat.
+    floor_scatter = None
+    if floor.found:
+        to_level = level_transform(floor.normal, floor.offset, k_s)
+        level = grid.centers @ (to_level[:3, :3] / k_s).T + to_level[:3, 3]
+        floor_scatter = surface_scatter(level[np.abs(level[:, 2]) < cfg.floor_band])
     clock.lap("ground")
     return Ground(
         n,
@@ -521,6 +532,7 @@ def find_ground(
         floor,
         dict(clock.laps),
         origin,
+        floor_scatter,
     )
 
 
@@ -648,11 +660,7 @@ def prepare(
             grid.counts,
             grid.point_to_voxel,
         )
-    # The sensor's noise as the scan kept it, measured where the surface is known flat.
-    floor_scatter = None
-    if floor.found:
-        z = grid.centers[:, 2]
-        floor_scatter = surface_scatter(grid.centers[np.abs(z) < cfg.floor_band])
+    floor_scatter = ground.floor_scatter
     inlier = (config or Config()).planes.threshold
     smoothed = cfg.smoothing or (
         cfg.auto_smoothing
