@@ -3,6 +3,8 @@
 - :func:`reappearance`: how many reference detections come back after the input changed;
 - :data:`STABILITY_TRANSFORMS` / :func:`stability_transforms`: the changes of input a
   detector should not notice (turns, a large offset, rounding, jitter, a shuffle, a subsample);
+- :func:`robustness_changes`: what sensors and pipelines do to real scans beyond that
+  (a centimetre of noise, a floor barely seen, two registrations of one scan merged);
 - :func:`false_detection_causes`: what a false detection really is (the ground-truth object
   holding most of its points, or nothing);
 - :func:`recall_by_group`: recall of the ground-truth objects per group (furniture family);
@@ -20,13 +22,16 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ontodetect.cloud import PointCloud, sensor_position
+from ontodetect.cloud import PointCloud, point_cloud, sensor_position
 from ontodetect.evaluation import Instance, match_instances, turn_cloud
 from ontodetect.geometry import point_overlap
 
 __all__ = [
+    "DOUBLE_JITTER",
+    "FLOOR_LOSS",
     "JITTER_SIGMA",
     "MISSED_CAUSES",
+    "NOISE_SIGMA",
     "NOTHING",
     "OFFSET",
     "ROUNDING",
@@ -38,6 +43,7 @@ __all__ = [
     "missed_causes",
     "reappearance",
     "recall_by_group",
+    "robustness_changes",
     "rows_to_values",
     "stability_transforms",
 ]
@@ -169,6 +175,58 @@ def stability_transforms(
 
 #: Every transform of the benchmark, by name.
 STABILITY_TRANSFORMS = stability_transforms()
+
+
+# -- robustness ----------------------------------------------------------------------------
+#: Std (m) of the noise added to every coordinate: a consumer depth camera's at 2-3 m
+#: (Nguyen, Izadi & Lovell 2012: 1.2 + 1.9 (z - 0.4)^2 mm along the ray, 9.6 mm at 2.5 m).
+NOISE_SIGMA = 0.01
+#: Share of the floor's points a copy loses: a floor the sensor met only at grazing angles.
+FLOOR_LOSS = 0.8
+#: NYU40 id of the floor (ScanNet's labels, the simulator's too).
+FLOOR_CLASS = 2
+#: Std (m) of the jitter of the second copy of every point: two registrations of one scan
+#: merged, 5 mm apart.
+DOUBLE_JITTER = 0.005
+
+
+def _noise(cloud: PointCloud, rng: np.random.Generator) -> PointCloud:
+    return cloud.replace(xyz=cloud.xyz + rng.normal(0.0, NOISE_SIGMA, cloud.xyz.shape))
+
+
+def _floor_unseen(cloud: PointCloud, rng: np.random.Generator) -> PointCloud:
+    floor = np.asarray(cloud.fields["class_id"]) == FLOOR_CLASS
+    return cloud.select(np.flatnonzero(~(floor & (rng.random(len(cloud)) < FLOOR_LOSS))))
+
+
+def _doubled(cloud: PointCloud, rng: np.random.Generator) -> PointCloud:
+    copy = cloud.xyz + rng.normal(0.0, DOUBLE_JITTER, cloud.xyz.shape)
+    return point_cloud(
+        np.vstack([cloud.xyz, copy]),
+        rgb=None if cloud.rgb is None else np.vstack([cloud.rgb, cloud.rgb]),
+        fields={k: np.concatenate([v, v]) for k, v in cloud.fields.items()},
+    )
+
+
+def robustness_changes() -> dict[str, Callable[[PointCloud, np.random.Generator], PointCloud]]:
+    """Name -> ``fn(cloud, rng)``: a labelled scan changed as sensors and pipelines change
+    real scans, beyond what the stability changes do (those keep the scan as it was made).
+
+    Every copy keeps the per-point labels (``instance``, ``class_id``), so it is scored
+    against its own ground truth: Gaussian noise of :data:`NOISE_SIGMA` on every
+    coordinate, :data:`FLOOR_LOSS` of the floor's points (class :data:`FLOOR_CLASS`)
+    removed, and every point twice, the copy jittered by :data:`DOUBLE_JITTER` (new rows).
+
+    Examples
+    --------
+    >>> list(robustness_changes())
+    ['noise 1 cm', 'floor 80 % unseen', 'points doubled']
+    """
+    return {
+        f"noise {NOISE_SIGMA * 100:g} cm": _noise,
+        f"floor {FLOOR_LOSS * 100:.0f} % unseen": _floor_unseen,
+        "points doubled": _doubled,
+    }
 
 
 # -- what the detections hit ---------------------------------------------------------------

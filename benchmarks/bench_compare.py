@@ -11,6 +11,8 @@ by side, so that the note of a change can give all three:
 - the false detections by what they really are, the objects missed by where they were
   lost (not clustered, split, merged into another object's cluster, scored as another class,
   lost in the vote), and the chair groups' recall;
+- robustness: TP / detections / ground truth and precision and recall per class on the real
+  scans changed as sensors change them (noise, a floor unseen, points doubled);
 - stability: mean and worst, and per change of the scan.
 
 A part one of the runs did not measure (``--only``) is left out, and said so. Rows that did
@@ -54,10 +56,11 @@ def load_run(path: Path) -> dict[str, Any]:
         doc = json.loads(text)
     except json.JSONDecodeError as exc:
         raise CompareError(f"{path}: not JSON (line {exc.lineno}: {exc.msg})") from None
-    if not isinstance(doc, dict) or not any(k in doc for k in ("real", "simulated", "stability")):
+    parts = ("real", "robustness", "simulated", "stability")
+    if not isinstance(doc, dict) or not any(k in doc for k in parts):
         raise CompareError(
-            f"{path}: not a generalization benchmark result (no 'real', 'simulated' or "
-            "'stability' part)"
+            f"{path}: not a generalization benchmark result (no 'real', 'robustness', "
+            "'simulated' or 'stability' part)"
         )
     fmt = doc.get("format")
     if fmt is not None and fmt not in FORMATS:
@@ -169,6 +172,22 @@ def stability_rows(
     return rows
 
 
+def robustness_rows(
+    before: Mapping[str, Any], after: Mapping[str, Any]
+) -> list[tuple[str, str, str, str, str]]:
+    """Per change of the real scans and class: TP/det/GT and P / R, before and after (the
+    robustness part is measured at point IoU 0.25 only)."""
+    rows = []
+    ch_b, ch_a = before.get("changes", {}), after.get("changes", {})
+    for name in _ordered(list(ch_b) + list(ch_a)):
+        fb = ch_b.get(name, {}).get("per_class", {})
+        fa = ch_a.get(name, {}).get("per_class", {})
+        for c in _ordered(list(fb) + list(fa)):
+            b, a = fb.get(c), fa.get(c)
+            rows.append((f"{name}, {c}", _cell(b), _cell(a), _pr(b), _pr(a)))
+    return rows
+
+
 def _table(
     title: str, columns: list[str], rows: list[tuple[Any, ...]], changed: bool
 ) -> Table | str:
@@ -257,6 +276,18 @@ def compare(
                         a.get("false_detections", {}).get(key, {}),
                     )
                 ],
+                changed,
+            )
+        )
+    b, a = before.get("robustness"), after.get("robustness")
+    if b is None or a is None:
+        out.append(f"Robustness: not in {'the first' if b is None else 'the second'} run")
+    else:
+        out.append(
+            _table(
+                "Robustness: the real scans changed, TP/det/GT at point IoU 0.25",
+                ["change, class", "before", "after", "P / R before", "P / R after"],
+                robustness_rows(b, a),
                 changed,
             )
         )

@@ -16,7 +16,10 @@ benchmark"):
 (c) **stability**: on a few real and simulated scans, the share of the detections on the
     scan as is that reappear (same label, point IoU >= 0.5 over the original rows) after a
     turn about the vertical, a large offset, 1 mm rounding, 0.5 mm jitter, a shuffle and an
-    80 % subsample.
+    80 % subsample;
+(d) **robustness**: precision and recall on the real scans again after what sensors and
+    pipelines do to scans (1 cm of noise, most of the floor unseen, every point twice), each
+    copy scored against its own labels.
 
 The simulated rooms come from ``ontodetect.synth.furnished.furnished_scene`` (Sweet Home 3D
 catalogue furniture) when that module exists, else from the parametric rooms of
@@ -55,6 +58,7 @@ from benchmarks._generalization import (
     missed_causes,
     reappearance,
     recall_by_group,
+    robustness_changes,
     rows_to_values,
     stability_transforms,
 )
@@ -71,8 +75,11 @@ from ontodetect.evaluation import (
     discover_scenes,
     evaluate_dataset,
     evaluate_scenes,
+    evaluation_classes,
+    instances_from_labels,
     load_scene,
     map_scenes,
+    match_instances,
 )
 
 #: Format tag of generalization.json.
@@ -718,6 +725,100 @@ def stability_table(title: str, res: Mapping[str, Any]) -> Table:
     return t
 
 
+# -- robustness ----------------------------------------------------------------------------
+def robustness_unit(
+    unit: tuple[SceneSource, str], detect_options: Mapping[str, Any]
+) -> dict[str, Any]:
+    """Detect on one labelled scan changed by one of :func:`robustness_changes`; a unit of
+    work: TP/det/GT per class at point IoU 0.25 and the scan's measured floor scatter."""
+    from ontodetect.pipeline import detect
+
+    source, name = unit
+    cloud = load_scene(source).cloud
+    rng = np.random.default_rng(zlib.crc32(f"{source.name}/{name}".encode()))
+    cloud = robustness_changes()[name](cloud, rng)
+    fields = cloud.fields
+    gts = instances_from_labels(
+        fields["instance"], fields["class_id"], evaluation_classes(), index=cloud.index
+    )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DataWarning)
+        result = detect(cloud, **detect_options)
+    preds = [
+        Instance.make(d.id, d.label, d.point_indices, d.score)
+        for d in result.detections
+        if d.label in CLASSES
+    ]
+    matched = match_instances(preds, gts, iou_threshold=THRESHOLDS["iou@0.25"]).pred_match
+    counts = {
+        c: [
+            sum(1 for p, m in zip(preds, matched) if p.label == c and m >= 0),
+            sum(1 for p in preds if p.label == c),
+            sum(1 for g in gts if g.label == c),
+        ]
+        for c in CLASSES
+    }
+    return {
+        "scene": source.name,
+        "change": name,
+        "counts": counts,
+        "floor_scatter": result.frame["floor_scatter"],
+    }
+
+
+def robustness(scans: Sequence[SceneSource], jobs: int, opts: Mapping[str, Any]) -> dict:
+    """Per change of :func:`robustness_changes`: TP/det/GT, precision and recall per class
+    at point IoU 0.25, summed over ``scans``, and the median floor scatter measured."""
+    names = list(robustness_changes())
+    options = {**opts, "jobs": 1}
+    work = functools.partial(robustness_unit, detect_options=options)
+    runs = map_scenes(
+        work, [(s, n) for s in scans for n in names], jobs=jobs, description="Robustness runs"
+    )
+    out: dict[str, Any] = {"scans": [s.name for s in scans], "changes": {}}
+    for n in names:
+        mine = [r for r in runs if r["change"] == n]
+        per_class = {}
+        for c in CLASSES:
+            tp, det, gt = (sum(r["counts"][c][k] for r in mine) for k in range(3))
+            per_class[c] = {
+                "tp": tp,
+                "det": det,
+                "gt": gt,
+                "precision": round(tp / det, 4) if det else 0.0,
+                "recall": round(tp / gt, 4) if gt else 0.0,
+            }
+        scatter = [r["floor_scatter"] for r in mine if r["floor_scatter"] is not None]
+        out["changes"][n] = {
+            "per_class": per_class,
+            "floor_scatter": round(float(np.median(scatter)), 5) if scatter else None,
+        }
+    return out
+
+
+def robustness_table(res: Mapping[str, Any], real: Mapping[str, Any] | None) -> Table:
+    """TP/det/GT and precision / recall per class and change, the scans as they are first."""
+    t = Table(
+        title="Robustness: the real scans changed, TP/det/GT at point IoU 0.25",
+        title_justify="left",
+    )
+    t.add_column("change")
+    for c in CLASSES:
+        t.add_column(c, justify="right")
+        t.add_column("P / R", justify="right")
+    t.add_column("floor scatter", justify="right")
+    rows = [("as they are", (real or {}).get("iou@0.25"), None)]
+    rows += [(n, v["per_class"], v["floor_scatter"]) for n, v in res["changes"].items()]
+    for name, figs, scatter in rows:
+        cells = [name]
+        for c in CLASSES:
+            f = (figs or {}).get(c)
+            cells += ["-", "-"] if f is None else [f"{f['tp']}/{f['det']}/{f['gt']}", _pr(f)]
+        cells.append("-" if scatter is None else f"{scatter * 1e3:.1f} mm")
+        t.add_row(*cells)
+    return t
+
+
 # -- the run -------------------------------------------------------------------------------
 def _real_scenes(path: Path, quick: bool) -> list[SceneSource]:
     """The labelled real scans of ``path`` (the first three with ``quick``)."""
@@ -786,9 +887,9 @@ def main(argv: list[str] | None = None) -> int:
     )
     ap.add_argument(
         "--only",
-        default="real,sim,stability",
-        help="which measurements to run, of real, sim and stability (default: all three; "
-        "stability needs the other two)",
+        default="real,robustness,sim,stability",
+        help="which measurements to run, of real, robustness, sim and stability (default: "
+        "all four; stability needs real and sim)",
     )
     ap.add_argument(
         "--rooms",
@@ -816,9 +917,9 @@ def main(argv: list[str] | None = None) -> int:
         except ValueError:
             ap.error(f"--turns takes degrees separated by commas, got {args.turns!r}")
     parts = {p.strip() for p in args.only.split(",") if p.strip()}
-    if not parts or parts - {"real", "sim", "stability"}:
-        ap.error(f"--only takes real, sim and stability, got {args.only!r}")
-    whole = parts == {"real", "sim", "stability"}
+    if not parts or parts - {"real", "robustness", "sim", "stability"}:
+        ap.error(f"--only takes real, robustness, sim and stability, got {args.only!r}")
+    whole = {"real", "sim", "stability"} <= parts
     alone = parts == {"stability"} and args.stability_scans
     if "stability" in parts and not (whole or alone):
         ap.error("--only stability needs real and sim too, or --stability-scans")
@@ -904,6 +1005,12 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
         # (a) real development scans
         if "real" in args.only:
             real = _run_real(args, real_scenes, jobs, opts, doc)
+        # (d) the same scans as sensors and pipelines change them
+        if "robustness" in args.only:
+            t0 = time.perf_counter()
+            doc["robustness"] = robustness(real_scenes, jobs, opts)
+            doc["robustness"]["seconds"] = round(time.perf_counter() - t0, 1)
+            console.print(robustness_table(doc["robustness"], doc.get("real", {}).get("per_class")))
 
         # (b) the simulated set
         if "sim" not in args.only:

@@ -21,7 +21,16 @@ def fig(tp, det, gt):
     }
 
 
-def run_doc(*, chairs=(8, 10, 12), wc_as_chair=2, merged=2, mean=0.9, stability=True, real=True):
+def run_doc(
+    *,
+    chairs=(8, 10, 12),
+    wc_as_chair=2,
+    merged=2,
+    mean=0.9,
+    stability=True,
+    real=True,
+    noisy=(5, 6),
+):
     key = "iou@0.25"
     doc = {
         "format": B.FORMAT,
@@ -46,6 +55,15 @@ def run_doc(*, chairs=(8, 10, 12), wc_as_chair=2, merged=2, mean=0.9, stability=
         doc["real"] = {
             "per_class": {key: {"chair": fig(23, 25, 26)}},
             "false_detections": {key: {}},
+        }
+    if noisy is not None:
+        doc["robustness"] = {
+            "changes": {
+                "noise 1 cm": {
+                    "per_class": {"chair": fig(*noisy, 12), "table": fig(2, 3, 4)},
+                    "floor_scatter": 0.0099,
+                }
+            }
         }
     if stability:
         doc["stability"] = {
@@ -118,6 +136,17 @@ def test_stability_rows_give_mean_and_worst_per_change():
         ("all", "0.9000 / 0.5000", "0.9500 / 0.7500"),
         ("turn 90°", "0.8000 / 0.5000", "-"),
     ]
+
+
+def test_robustness_rows_give_each_change_and_class_before_and_after():
+    before = run_doc()["robustness"]
+    after = run_doc(noisy=(9, 10))["robustness"]
+    assert C.robustness_rows(before, after) == [
+        ("noise 1 cm, chair", "5/6/12", "9/10/12", "0.83 / 0.42", "0.90 / 0.75"),
+        ("noise 1 cm, table", "2/3/4", "2/3/4", "0.67 / 0.50", "0.67 / 0.50"),
+    ]
+    items = C.compare(run_doc(), run_doc(noisy=None), changed=True)
+    assert "Robustness: not in the second run" in items
 
 
 def test_compare_of_a_run_with_itself_changes_nothing():

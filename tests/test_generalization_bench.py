@@ -78,6 +78,49 @@ def test_stability_transforms_keep_rows_and_do_what_they_say(rng):
     assert np.all(xyz == cloud.xyz)  # the input is not modified
 
 
+# -- robustness ----------------------------------------------------------------------------
+def test_robustness_changes_keep_the_labels_and_do_what_they_say(rng):
+    n = 4000
+    xyz = rng.uniform(0, 3, size=(n, 3))
+    class_id = np.where(np.arange(n) < n // 2, G.FLOOR_CLASS, 5)  # half floor, half chair
+    cloud = point_cloud(xyz, fields={"class_id": class_id, "instance": np.arange(n) % 7})
+    fns = G.robustness_changes()
+    assert list(fns) == ["noise 1 cm", "floor 80 % unseen", "points doubled"]
+    out = {name: fn(cloud, np.random.default_rng(0)) for name, fn in fns.items()}
+    noisy = out["noise 1 cm"]
+    assert np.std(noisy.xyz - xyz) == pytest.approx(G.NOISE_SIGMA, rel=0.05)
+    np.testing.assert_array_equal(noisy.fields["class_id"], class_id)
+    unseen = out["floor 80 % unseen"]
+    kept_floor = np.count_nonzero(unseen.fields["class_id"] == G.FLOOR_CLASS)
+    assert kept_floor / (n // 2) == pytest.approx(1 - G.FLOOR_LOSS, abs=0.03)
+    assert np.count_nonzero(unseen.fields["class_id"] == 5) == n // 2  # nothing else goes
+    np.testing.assert_array_equal(unseen.xyz, xyz[unseen.index])
+    doubled = out["points doubled"]
+    assert len(doubled) == 2 * n
+    np.testing.assert_array_equal(doubled.xyz[:n], xyz)
+    assert np.std(doubled.xyz[n:] - xyz) == pytest.approx(G.DOUBLE_JITTER, rel=0.05)
+    instance = cloud.fields["instance"]
+    np.testing.assert_array_equal(doubled.fields["instance"], np.concatenate([instance, instance]))
+    assert np.all(xyz == cloud.xyz)  # the input is not modified
+
+
+def test_a_robustness_unit_scores_the_changed_scan_against_its_own_labels(tmp_path):
+    from ontodetect.evaluation import SceneSource
+    from ontodetect.synth import synthesize, write_synth
+
+    write_synth(synthesize("dining_room", "rgbd", seed=5, points=30_000), tmp_path / "room")
+    source = SceneSource("room", str(tmp_path / "room"), "ontodetect", "room")
+    clean = B.robustness_unit((source, "points doubled"), {"seed": 0, "room": None})
+    noisy = B.robustness_unit((source, "noise 1 cm"), {"seed": 0, "room": None})
+    # Doubled, every object has twice its points but is the same object.
+    assert clean["counts"]["chair"][2] == noisy["counts"]["chair"][2] > 0
+    assert all(tp <= min(det, gt) for tp, det, gt in noisy["counts"].values())
+    # The noise is measured on the floor: the centimetre added over the simulated sensor's
+    # own few millimetres (the doubled copy's 5 mm jitter adds less).
+    assert noisy["floor_scatter"] == pytest.approx(G.NOISE_SIGMA, rel=0.3)
+    assert clean["floor_scatter"] < noisy["floor_scatter"] - 0.002
+
+
 # -- false detections and families ---------------------------------------------------------
 def tiny_labelled_scan():
     """Rows 0-9 floor (instance 1), 10-19 wall (2), 20-29 chair (3), 30-39 sink (4),
