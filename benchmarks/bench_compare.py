@@ -279,30 +279,27 @@ def compare(
                 changed,
             )
         )
-    b, a = before.get("robustness"), after.get("robustness")
-    if b is None or a is None:
-        out.append(f"Robustness: not in {'the first' if b is None else 'the second'} run")
-    else:
-        out.append(
-            _table(
-                "Robustness: the real scans changed, TP/det/GT at point IoU 0.25",
-                ["change, class", "before", "after", "P / R before", "P / R after"],
-                robustness_rows(b, a),
-                changed,
-            )
-        )
-    b, a = before.get("stability"), after.get("stability")
-    if b is None or a is None:
-        out.append(f"Stability: not in {'the first' if b is None else 'the second'} run")
-    else:
-        out.append(
-            _table(
-                "Stability: detections that reappear, mean / worst",
-                ["change of the scan", "before", "after"],
-                stability_rows(b, a),
-                changed,
-            )
-        )
+    for part, title, heading, columns, rows in (
+        (
+            "robustness",
+            "Robustness",
+            "the real scans changed, TP/det/GT at point IoU 0.25",
+            ["change, class", "before", "after", "P / R before", "P / R after"],
+            robustness_rows,
+        ),
+        (
+            "stability",
+            "Stability",
+            "detections that reappear, mean / worst",
+            ["change of the scan", "before", "after"],
+            stability_rows,
+        ),
+    ):
+        b, a = before.get(part), after.get(part)
+        if b is None or a is None:
+            out.append(f"{title}: not in {'the first' if b is None else 'the second'} run")
+        else:
+            out.append(_table(f"{title}: {heading}", columns, rows(b, a), changed))
     return out
 
 
