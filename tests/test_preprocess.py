@@ -488,6 +488,22 @@ def test_surface_scatter_ignores_a_floor_registered_twice_over_a_third_of_it():
     assert surface_scatter(floor[:5]) is None
 
 
+def test_surface_scatter_is_not_read_off_a_floor_barely_seen():
+    # Most of the floor lost: the cells that still hold points are those of the chair legs
+    # and boxes standing on it, not the floor's noise.
+    rng = np.random.default_rng(7)
+    floor = rect(rng, (0, 0, 0), (4, 0, 0), (0, 3, 0), 0.03, noise=0.003)
+    kept = floor[rng.random(len(floor)) < 0.05]
+    legs = np.vstack(
+        [
+            rect(rng, (x, y, 0), (0.05, 0, 0), (0, 0, 0.03), 0.004)
+            for x, y in rng.uniform(0.2, 2.8, size=(40, 2))
+        ]
+    )
+    assert surface_scatter(np.vstack([floor, legs])) == pytest.approx(0.003, rel=0.3)
+    assert surface_scatter(np.vstack([kept, legs])) is None
+
+
 @given(st.floats(-1e3, 1e3), st.floats(-1e3, 1e3), st.floats(-5.0, 5.0))
 def test_surface_scatter_does_not_depend_on_where_the_floor_lies(dx, dy, dz):
     rng = np.random.default_rng(5)

@@ -23,6 +23,9 @@ BLOCK = 200_000
 #: bend by centimetres over metres) while holding enough points of a 50,000-point room.
 SCATTER_CELL = 0.25
 SCATTER_MIN_POINTS = 10
+#: ... and the share of the occupied cells that must hold that many: on a surface seen too
+#: sparsely, the cells that do are those where something stands on it.
+SCATTER_MIN_SHARE = 0.5
 #: Median absolute deviation to standard deviation, for Gaussian scatter.
 MAD_TO_STD = 1.4826
 
@@ -191,7 +194,10 @@ def smooth_surface(points: ArrayLike, neighbors: int = 12) -> NDArray[np.float64
 
 
 def surface_scatter(
-    points: ArrayLike, cell: float = SCATTER_CELL, min_points: int = SCATTER_MIN_POINTS
+    points: ArrayLike,
+    cell: float = SCATTER_CELL,
+    min_points: int = SCATTER_MIN_POINTS,
+    min_share: float = SCATTER_MIN_SHARE,
 ) -> float | None:
     """How far the points of a surface scatter about it (m): a robust standard deviation.
 
@@ -207,7 +213,9 @@ def surface_scatter(
     Returns
     -------
     float or None
-        ``None`` when no cell holds ``min_points`` points.
+        ``None`` when fewer than ``min_share`` of the occupied cells hold ``min_points``
+        points: a floor seen so sparsely (most of it at grazing angles, or hidden) that
+        the cells holding enough points are those where something stands on it.
 
     Examples
     --------
@@ -225,7 +233,7 @@ def surface_scatter(
     groups, num = cell_index(pts, cell)
     means, cov, counts = grouped_covariance(pts, groups, num)
     kept = counts >= min_points
-    if not kept.any():
+    if not kept.any() or kept.mean() < min_share:
         return None
     normals = np.linalg.eigh(cov[kept])[1][:, :, 0]
     slot = np.full(num, -1)
