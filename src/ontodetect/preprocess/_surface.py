@@ -207,7 +207,7 @@ def surface_scatter(
     Gaussian noise, which a few points of clutter do not move). The surface's scatter is
     the median over the cells: cells that hold two layers (a floor registered twice, a rug,
     a step) scatter more, and may be up to half of them. On the floor of a scan it
-    is the sensor's noise as the scan kept it: 2-5 mm on ScanNet's reconstructed rooms,
+    is the sensor's noise as the scan kept it: 1-4 mm on ScanNet's reconstructed rooms,
     about 1 cm on a depth frame seen from 2-3 m.
 
     Returns
