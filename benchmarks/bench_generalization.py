@@ -509,17 +509,14 @@ def stability(
     scans: Sequence[SceneSource],
     turns: Sequence[float],
     jobs: int,
-    seed: int,
-    config: Config | None = None,
-    room: str | None = "auto",
+    opts: Mapping[str, Any],
 ) -> dict[str, Any]:
     """Share of reference detections that reappear, per transform and scan (detected with
-    ``config`` when given, and the room prior ``room``)."""
+    ``opts``, the same detect options as the other parts: seed, room prior, configuration
+    and ontology)."""
     names = list(stability_transforms(turns))
     units = [(s, t, tuple(turns)) for s in scans for t in [None, *names]]
-    options: dict[str, Any] = {"jobs": 1, "seed": seed, "room": room}
-    if config is not None:
-        options["config"] = config
+    options = {**opts, "jobs": 1}
     work = functools.partial(stability_unit, detect_options=options)
     runs = map_scenes(work, units, jobs=jobs, description="Stability runs")
     ref = {r["scene"]: r["detections"] for r in runs if r["transform"] is None}
@@ -1128,7 +1125,7 @@ def _run_stability(
     """(c): the picked scans turned, moved and rounded, printed and put in ``doc``."""
     turns = args.turns or (QUICK_STABILITY_TURNS if args.quick else STABILITY_TURNS)
     t0 = time.perf_counter()
-    stab = stability(picked, turns, jobs, args.seed, opts.get("config"), opts["room"])
+    stab = stability(picked, turns, jobs, opts)
     stab["seconds"] = round(time.perf_counter() - t0, 1)
     doc["stability"] = stab
     console.print(
