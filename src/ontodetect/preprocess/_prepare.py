@@ -516,8 +516,10 @@ def find_ground(
     floor_scatter = None
     if floor.found:
         to_level = level_transform(floor.normal, floor.offset, k_s)
-        level = grid.centers @ (to_level[:3, :3] / k_s).T + to_level[:3, 3]
-        floor_scatter = surface_scatter(level[np.abs(level[:, 2]) < cfg.floor_band])
+        rot, shift = to_level[:3, :3] / k_s, to_level[:3, 3]
+        # Heights first, then the floor's voxels alone: no levelled copy of a large scan.
+        near = np.abs(grid.centers @ rot[2] + shift[2]) < cfg.floor_band
+        floor_scatter = surface_scatter(grid.centers[near] @ rot.T + shift)
     clock.lap("ground")
     return Ground(
         n,
