@@ -1,8 +1,8 @@
-"""Generalization: real development scans, a fixed set of simulated furnished rooms, stability.
+"""Generalization: real development scans, simulated furnished rooms, stability, robustness.
 
 Run as ``python -m benchmarks generalization --real DIR [--out DIR] [--jobs 2] [--quick]``.
-Three measurements, each at point IoU 0.25 and 0.5 (docs/benchmarks.md, "Generalization
-benchmark"):
+Four measurements, the first three at point IoU 0.25 and 0.5, the last at 0.25
+(docs/benchmarks.md, "Generalization benchmark"):
 
 (a) **real**: precision and recall per class on the labelled scans in ``--real`` (ScanNet,
     VoteNet layout), with ``ontodetect.evaluation.evaluate_dataset``, and what the false
@@ -965,7 +965,7 @@ def _room_option(room: str) -> str | None:
 
 
 def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
-    """The three measurements, printed and written to ``args.out/generalization.json``."""
+    """The measurements, printed and written to ``args.out/generalization.json``."""
     from ontodetect._progress import use_reporter
     from ontodetect.cli._console import RichReporter
 
