@@ -476,32 +476,46 @@ def false_summary(false: Mapping[str, list[dict[str, Any]]]) -> dict[str, dict[s
 
 
 # -- stability -----------------------------------------------------------------------------
-def stability_unit(
-    unit: tuple[SceneSource, str | None, tuple[float, ...]], detect_options: Mapping[str, Any]
-) -> dict[str, Any]:
-    """Detect on one scan, as is (transform None) or changed; a unit of work."""
+def _detect_changed(
+    source: SceneSource,
+    name: str | None,
+    change: Callable[[Any, np.random.Generator], Any] | None,
+    detect_options: Mapping[str, Any],
+) -> tuple[Any, Any, list[Instance], float]:
+    """Read a scan, change it by ``change`` (seeded by the scan's and the change's name;
+    ``None``: as is) and detect: the cloud, the result, its reported detections and the
+    seconds detection took."""
     from ontodetect.pipeline import detect
 
-    source, name, turns = unit
     cloud = load_scene(source).cloud
-    if name is not None:
-        rng = np.random.default_rng(zlib.crc32(f"{source.name}/{name}".encode()))
-        cloud = stability_transforms(turns)[name](cloud, rng)
+    if change is not None:
+        cloud = change(cloud, np.random.default_rng(zlib.crc32(f"{source.name}/{name}".encode())))
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DataWarning)
         result = detect(cloud, **detect_options)
+    seconds = time.perf_counter() - t0
     dets = [
         Instance.make(d.id, d.label, d.point_indices, d.score, d.center)
         for d in result.detections
         if d.label in CLASSES
     ]
+    return cloud, result, dets, seconds
+
+
+def stability_unit(
+    unit: tuple[SceneSource, str | None, tuple[float, ...]], detect_options: Mapping[str, Any]
+) -> dict[str, Any]:
+    """Detect on one scan, as is (transform None) or changed; a unit of work."""
+    source, name, turns = unit
+    change = None if name is None else stability_transforms(turns)[name]
+    cloud, _, dets, seconds = _detect_changed(source, name, change, detect_options)
     return {
         "scene": source.name,
         "transform": name,
         "detections": dets,
         "kept": None if name is None else np.asarray(cloud.index),
-        "seconds": time.perf_counter() - t0,
+        "seconds": seconds,
     }
 
 
@@ -728,24 +742,14 @@ def robustness_unit(
 ) -> dict[str, Any]:
     """Detect on one labelled scan changed by one of :func:`robustness_changes`; a unit of
     work: TP/det/GT per class at point IoU 0.25 and the scan's measured floor scatter."""
-    from ontodetect.pipeline import detect
-
     source, name = unit
-    cloud = load_scene(source).cloud
-    rng = np.random.default_rng(zlib.crc32(f"{source.name}/{name}".encode()))
-    cloud = robustness_changes()[name](cloud, rng)
+    cloud, result, preds, _ = _detect_changed(
+        source, name, robustness_changes()[name], detect_options
+    )
     fields = cloud.fields
     gts = instances_from_labels(
         fields["instance"], fields["class_id"], evaluation_classes(), index=cloud.index
     )
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", DataWarning)
-        result = detect(cloud, **detect_options)
-    preds = [
-        Instance.make(d.id, d.label, d.point_indices, d.score)
-        for d in result.detections
-        if d.label in CLASSES
-    ]
     matched = match_instances(preds, gts, iou_threshold=THRESHOLDS["iou@0.25"]).pred_match
     counts = {
         c: [

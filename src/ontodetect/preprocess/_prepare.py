@@ -588,7 +588,8 @@ def prepare(
     (0.7, True)
     """
     del seed  # deterministic: no random step
-    cfg = (config or Config()).prepare
+    config = config or Config()
+    cfg = config.prepare
     if not isinstance(cloud, PointCloud):
         cloud = point_cloud(cloud)
     if cfg.depth_smoothing:
@@ -663,7 +664,7 @@ def prepare(
             grid.point_to_voxel,
         )
     floor_scatter = ground.floor_scatter
-    inlier = (config or Config()).planes.threshold
+    inlier = config.planes.threshold
     smoothed = cfg.smoothing or (
         cfg.auto_smoothing
         and floor_scatter is not None
@@ -729,7 +730,7 @@ def prepare(
         object_mask=object_mask,
         structure_planes=planes,
         spacing=float(spacing),
-        config=config or Config(),
+        config=config,
         floor_map=floor_map,
         info={
             "scale_source": scale_source,

@@ -250,9 +250,10 @@ def _outline_shares(
         centers = np.asarray(c.centers)
         planes = c.scored_planes
         flat = [float(p.tilt) <= HORIZONTAL_TILT for p in planes]
-        boards = np.zeros(len(centers), dtype=bool)
-        for plane in itertools.compress(planes, flat):
-            boards[np.asarray(plane.inliers)] = True
+        if sunk:  # the cluster's points on its level planes, which no bowl is
+            boards = np.zeros(len(centers), dtype=bool)
+            for plane in itertools.compress(planes, flat):
+                boards[np.asarray(plane.inliers)] = True
         values: list[list[float]] = [[] for _ in out]
         for i, plane in enumerate(planes):
             if not flat[i]:
