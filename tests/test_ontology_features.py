@@ -19,7 +19,7 @@ from ontodetect.ontology import (
     sigma_floor,
 )
 from ontodetect.ontology._features import FEATURES
-from test_ontology import P, cluster
+from test_ontology import P, R, cluster
 
 
 @pytest.fixture
@@ -195,6 +195,27 @@ def test_across_is_the_angle_between_a_seat_s_long_axis_and_the_back_s_run():
     assert math.isnan(across(cluster([P(0.0, 0.5, 1.0, 0.3), board], length=1.0), 0, 1))
     cushion = Axed(1.0, 0.42, 0.62, 0.58)  # about square: no long axis to measure along
     assert math.isnan(across(cluster([cushion, board], length=1.0), 0, 1))
+
+
+def test_a_cabinet_s_front_runs_along_its_top_not_across_its_end():
+    """A long top on a closed panel along it is a sideboard; the same top on a panel
+    across its end is a desk on panel legs, which the built-in cabinet costs."""
+    from ontodetect.ontology import builtin_ontology
+
+    @dataclass(frozen=True)
+    class Axed(P):
+        normal: tuple = (0.0, 0.0, 1.0)
+        axes: tuple = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0))
+
+    top = Axed(1.0, 0.74, 1.2, 0.6)  # 1.2 m along x, 0.6 m deep
+    along = Axed(89.0, 0.37, 1.2, 0.72, cy=0.3, normal=(0.0, 1.0, 0.0))  # a front, along x
+    end = Axed(89.0, 0.37, 0.6, 0.72, cx=0.6, normal=(1.0, 0.0, 0.0))  # an end panel, along y
+    cabinet = builtin_ontology()["cabinet"]
+    touching = {(0, 1): R(angle=88.0, distance=0.01)}
+    sideboard = score_class(cabinet, cluster([top, along], touching, length=1.2, breadth=0.6))
+    desk = score_class(cabinet, cluster([top, end], touching, length=1.2, breadth=0.6))
+    assert sideboard.assignment == {"top": 0, "front": 1}
+    assert desk.likelihood < 0.2 * sideboard.likelihood
 
 
 def test_registering_twice_or_without_a_measure_is_refused():
