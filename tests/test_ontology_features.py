@@ -12,6 +12,7 @@ from ontodetect.ontology import (
     PART_FEATURES,
     RELATION_FEATURES,
     Feature,
+    builtin_ontology,
     feature_registry,
     parse_ontology,
     register_feature,
@@ -182,7 +183,6 @@ class Axed(P):  # a plane with its normal and its in-plane axes, as `across` rea
 def test_across_is_the_angle_between_a_seat_s_long_axis_and_the_back_s_run():
     """A sofa's back runs along its seat (0); a bed's headboard stands across its
     mattress's end (90); a square cushion, or planes given without axes, are not measured."""
-
     seat = Axed(1.0, 0.42, 1.8, 0.6)  # long along x
     back = Axed(80.0, 0.7, 1.8, 0.4, cy=0.35, normal=(0.0, 0.98, 0.17))  # runs along x
     board = Axed(88.0, 0.8, 1.4, 0.5, cx=1.0, normal=(1.0, 0.0, 0.0))  # runs along y
@@ -201,8 +201,6 @@ def test_across_is_the_angle_between_a_seat_s_long_axis_and_the_back_s_run():
 def test_a_cabinet_s_front_runs_along_its_top_not_across_its_end():
     """A long top on a closed panel along it is a sideboard; the same top on a panel
     across its end is a desk on panel legs, which the built-in cabinet costs."""
-    from ontodetect.ontology import builtin_ontology
-
     top = Axed(1.0, 0.74, 1.2, 0.6)  # 1.2 m along x, 0.6 m deep
     along = Axed(89.0, 0.37, 1.2, 0.72, cy=0.3, normal=(0.0, 1.0, 0.0))  # a front, along x
     end = Axed(89.0, 0.37, 0.6, 0.72, cx=0.6, normal=(1.0, 0.0, 0.0))  # an end panel, along y
