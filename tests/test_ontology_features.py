@@ -63,6 +63,7 @@ def test_sigma_floors_are_those_calibration_used():
         "covered": 0.03,
         "sunk": 0.03,
         "behind": 0.02,
+        "over": 0.02,
         "aside": 0.02,
         "across": 1.0,
         "overlap": 0.03,
@@ -210,6 +211,35 @@ def test_a_cabinet_s_front_runs_along_its_top_not_across_its_end():
     desk = score_class(cabinet, cluster([top, end], touching, length=1.2, breadth=0.6))
     assert sideboard.assignment == {"top": 0, "front": 1}
     assert desk.likelihood < 0.2 * sideboard.likelihood
+
+
+def test_a_chair_s_back_rises_above_its_arms():
+    """Armrests stand 20-25 cm over the seat and the back 36 cm and more: a level board
+    as high as the top of the panel behind it (a hutch's shelf over its back panel, a
+    cabinet's top over its front) is no armrest."""
+
+    @dataclass(frozen=True)
+    class Facing(P):
+        normal: tuple = (0.0, 1.0, 0.0)
+
+    seat = P(1.0, 0.42, 0.5, 0.48)
+    back = Facing(80.0, 0.58, 0.5, 0.3, cy=0.26)  # up to 0.73 m
+    arm = P(0.0, 0.6, 0.6, 0.12, cx=0.3)
+    board = P(0.0, 0.71, 0.6, 0.12, cx=0.3)  # as high as the back's top
+    near = {
+        (0, 1): R(angle=80.0, distance=0.02),
+        (0, 2): R(angle=1.0, distance=0.05),
+        (1, 2): R(angle=80.0, distance=0.03),
+    }
+    over = FEATURES["relation"]["over"].relation
+    assert over(cluster([seat, back, arm], length=0.8), 1, 2) == pytest.approx(0.62 - 0.73)
+    assert over(cluster([seat, back, board], length=0.8), 1, 2) == pytest.approx(0.0)
+    chair = builtin_ontology()["chair"]
+    armchair = score_class(chair, cluster([seat, back, arm], near, length=0.8))
+    boarded = score_class(chair, cluster([seat, back, board], near, length=0.8))
+    assert armchair.assignment["arm"] == 2
+    assert boarded.assignment["arm"] is None and boarded.assignment["other_arm"] is None
+    assert boarded.likelihood < 0.8 * armchair.likelihood
 
 
 def test_registering_twice_or_without_a_measure_is_refused():

@@ -178,6 +178,10 @@ def _gap(desc: Any, i: int, j: int) -> float:
     return float(desc.planes[j].centroid[2] - desc.planes[i].centroid[2])
 
 
+def _over(desc: Any, i: int, j: int) -> float:
+    return float(desc.planes[j].z_max - desc.planes[i].z_max)
+
+
 #: A plane whose normal leans less than this from vertical (the sine of 17 degrees from
 #: horizontal) has no front and back: ``behind`` is 0 for it.
 _FACING = 0.3
@@ -339,6 +343,8 @@ for _feature in (
             relation=_relation_attribute("distance", math.inf)),
     Feature("gap", "relation", "Pr", "height of b's centroid minus a's (m)", 0.02,
             relation=_gap),
+    Feature("over", "relation", "Pr", "height of b's highest point minus a's (m)", 0.02,
+            relation=_over),
     Feature("behind", "relation", "Pr",
             "horizontal distance of b's centroid behind plane a, along a's outward normal "
             "(m; negative in front of it)", 0.02, relation=_behind),
