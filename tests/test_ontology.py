@@ -360,6 +360,17 @@ def test_seat_hidden_behind_a_desk_counts_as_occluded():
         backrest_behind_desk(bottom=0.9),
     ):
         assert missing_factor(seat, desc) == pytest.approx(seat.missing)
+    # What shows ending in a level board (a hutch's shelf over its back panel, a cabinet's
+    # top over its front) hides nothing under it: a small level plate (a back's top rail)
+    # or a board well under the top does not count.
+    back = backrest_behind_desk().planes[0]
+    for board, hidden in (
+        (P(tilt=1, height=0.97, length=0.6, width=0.3), False),
+        (P(tilt=1, height=0.97, length=0.3, width=0.06), True),
+        (P(tilt=1, height=0.62, length=0.6, width=0.3), True),
+    ):
+        desc = replace(backrest_behind_desk(), planes=[back, board])
+        assert missing_factor(seat, desc) == pytest.approx(0.15 if hidden else seat.missing)
     hidden = score_cluster(backrest_behind_desk(), o)
     alone = score_cluster(backrest_behind_desk(shelter=-math.inf), o)
     assert hidden.best == "chair" and hidden.probabilities["chair"] > 0.5
