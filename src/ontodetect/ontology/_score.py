@@ -97,12 +97,13 @@ HIDDEN_MARGIN = 0.1
 #: well as an office chair's (EN 1335-1: 420-530 mm); its lowest, 0.35 m, lies 0.20 m under
 #: the range's 0.55 m centre.
 SHELTERED_MARGIN = 0.2
-#: What shows of a lifted cluster ends in a board when a level plane of at least this area
-#: (m², a surface as large as one that can shelter a seat: segment.SHELTER_AREA) reaches
-#: within this (m, the MSAC threshold and a board's thickness) of its top. A chair pushed
-#: under a table shows its back's upper edge; a hutch's shelf over its back panel or a
-#: cabinet's top over its front shows a board, and hides nothing under it.
-TOP_AREA = 0.1
+#: Horizontal planes of at least this area (m²) can hide a part: a neighbour's top that
+#: shelters a seat (segment.shelter_heights), and no less a board that ends what shows of
+#: a lifted cluster ...
+SHELTER_AREA = 0.1
+#: ... when it reaches within this (m, the MSAC threshold and a board's thickness) of its
+#: top. A chair pushed under a table shows its back's upper edge; a hutch's shelf over its
+#: back panel or a cabinet's top over its front shows a board, and hides nothing under it.
 TOP_REACH = 0.05
 
 
@@ -432,7 +433,7 @@ def missing_factor(part: Part, desc: ClusterDescription) -> float:
       ``desc.hidden_below`` and not more than ``HIDDEN_MARGIN`` below the cluster's
       bottom): the seat of a chair seen from behind.
 
-    Neither holds when what shows ends in a level board (``TOP_AREA``, ``TOP_REACH``).
+    Neither holds when what shows ends in a level board (``SHELTER_AREA``, ``TOP_REACH``).
     """
     bottom = float(desc.bottom)
     if part.occluded is None or bottom <= LIFTED_BOTTOM:
@@ -440,7 +441,7 @@ def missing_factor(part: Part, desc: ClusterDescription) -> float:
     top = float(desc.height)
     if any(
         float(p.tilt) < HORIZONTAL_TILT
-        and float(p.area) >= TOP_AREA
+        and float(p.area) >= SHELTER_AREA
         and float(p.z_max) >= top - TOP_REACH
         for p in desc.planes
     ):  # what shows ends in a level board: a shelf or a cabinet's top, not a backrest

@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 from ..geometry import box_footprint
 from ..ontology import ClusterDescription
 from ..ontology._features import HIDDEN_DEPTH
-from ..ontology._score import HORIZONTAL_TILT
+from ..ontology._score import HORIZONTAL_TILT, SHELTER_AREA
 from ..preprocess._structure import FLOOR
 from ._segmentation import Cluster, Segmentation
 
@@ -363,9 +363,8 @@ def hidden_heights(tops: NDArray, centers: NDArray, eye: Sequence[float]) -> NDA
     return np.where(d >= SELF_SHADOW_DISTANCE, hidden, -math.inf)
 
 
-#: Horizontal planes of at least this area (m²) can hide ...
-SHELTER_AREA = 0.1
-#: ... what stands within this horizontal gap of their cluster's box (m).
+#: Horizontal planes of at least SHELTER_AREA (m², ontology._score) can hide what stands
+#: within this horizontal gap of their cluster's box (m).
 SHELTER_GAP = 0.4
 
 
