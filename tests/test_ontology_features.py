@@ -136,13 +136,14 @@ def test_a_part_rise_is_measured_from_the_plane_the_part_takes():
     assert only_seat.assignment["top"] is None  # a seat with arms above it is no top
 
 
+@dataclass(frozen=True)
+class Facing(P):  # an upright plane facing +y, as `behind` and `aside` read it
+    normal: tuple = (0.0, 1.0, 0.0)
+
+
 def test_behind_measures_along_a_backrest_s_outward_normal():
     """An armrest in front of the backrest is negative, a cistern top behind it positive; a
     level plane has no front and back."""
-
-    @dataclass(frozen=True)
-    class Facing(P):
-        normal: tuple = (0.0, 1.0, 0.0)
 
     back = Facing(85.0, 0.7, 0.45, 0.4, cy=0.2)
     arm, cistern = P(0.0, 0.62, 0.6, 0.15, cy=-0.1), P(0.0, 0.76, 0.36, 0.2, cy=0.3)
@@ -157,10 +158,6 @@ def test_behind_measures_along_a_backrest_s_outward_normal():
 def test_aside_measures_across_the_upright_plane_whichever_comes_first():
     """A backrest centred behind its seat is 0 aside; a headboard's end beside a
     nightstand's top is its offset along the headboard; two level planes have no upright."""
-
-    @dataclass(frozen=True)
-    class Facing(P):
-        normal: tuple = (0.0, 1.0, 0.0)
 
     seat = P(0.0, 0.45, 0.45, 0.42, cx=0.3, cy=0.0)
     back = Facing(85.0, 0.7, 0.45, 0.4, cx=0.3, cy=0.22)
@@ -217,10 +214,6 @@ def test_a_chair_s_back_rises_above_its_arms():
     """Armrests stand 20-25 cm over the seat and the back 36 cm and more: a level board
     as high as the top of the panel behind it (a hutch's shelf over its back panel, a
     cabinet's top over its front) is no armrest."""
-
-    @dataclass(frozen=True)
-    class Facing(P):
-        normal: tuple = (0.0, 1.0, 0.0)
 
     seat = P(1.0, 0.42, 0.5, 0.48)
     back = Facing(80.0, 0.58, 0.5, 0.3, cy=0.26)  # up to 0.73 m
