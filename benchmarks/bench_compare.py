@@ -12,7 +12,8 @@ by side, so that the note of a change can give all three:
   lost (not clustered, split, merged into another object's cluster, scored as another class,
   lost in the vote), and the chair groups' recall;
 - robustness: TP / detections / ground truth and precision and recall per class on the real
-  scans changed as sensors change them (noise, a floor unseen, points doubled);
+  scans changed as sensors change them (noise, a floor unseen, points doubled, half the
+  points);
 - stability: mean and worst, and per change of the scan.
 
 A part one of the runs did not measure (``--only``) is left out, and said so. Rows that did

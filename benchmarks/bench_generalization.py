@@ -18,8 +18,9 @@ Four measurements, the first three at point IoU 0.25 and 0.5, the last at 0.25
     turn about the vertical, a large offset, 1 mm rounding, 0.5 mm jitter, a shuffle and an
     80 % subsample;
 (d) **robustness**: precision and recall on the real scans again after what sensors and
-    pipelines do to scans (1 cm of noise, most of the floor unseen, every point twice), each
-    copy scored against its own labels.
+    pipelines do to scans (1 cm of noise, most of the floor unseen, every point twice, half
+    the points: a room twice the size in as many points), each copy scored against its own
+    labels.
 
 The simulated rooms come from ``ontodetect.synth.furnished.furnished_scene`` (Sweet Home 3D
 catalogue furniture) when that module exists, else from the parametric rooms of
