@@ -611,6 +611,19 @@ def test_near_names_an_unknown_class_and_needs_a_distance():
         parse_ontology(text)
 
 
+def test_a_seat_that_goes_on_into_the_next_cluster_is_no_chair():
+    """A seat ends where its chair ends (``runs_on``): what goes on level from it into the
+    next cluster for a place's width or a footstool's costs nothing; for what seats two, it
+    is the rest of a bench or a sofa, and the piece is no chair."""
+    o = builtin_ontology()
+    free = score_cluster(replace(chair(), scene={"runs_on": [0.0, math.nan]}), o)
+    row = score_cluster(replace(chair(), scene={"runs_on": [0.75, math.nan]}), o)
+    bench = score_cluster(replace(chair(), scene={"runs_on": [1.5, math.nan]}), o)
+    assert free.best == row.best == "chair"
+    assert row.probabilities["chair"] == pytest.approx(free.probabilities["chair"])
+    assert bench.probabilities["chair"] < 0.1 * free.probabilities["chair"]
+
+
 def test_a_board_seen_under_the_seat_is_no_chair():
     """Under a seat are the sitter's legs and the chair's legs or column: a lower board seen
     inside the seat's outline (a nightstand's or a desk compartment's shelf, ``seen_below``)

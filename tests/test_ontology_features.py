@@ -62,6 +62,7 @@ def test_sigma_floors_are_those_calibration_used():
         "seen_below": 0.03,
         "covered": 0.03,
         "sunk": 0.03,
+        "runs_on": 0.03,
         "behind": 0.02,
         "over": 0.02,
         "aside": 0.02,

@@ -4,6 +4,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from ontodetect import InvalidParameterError, point_cloud
 from ontodetect.config import Config
@@ -224,6 +226,85 @@ def test_covered_finds_a_top_over_a_shelf_and_nothing_over_an_armchairs_seat():
     assert level[(3, True)] == 0.0  # nothing over the desk's top
     assert level[(1, False)] < 0.15  # the armchair's arms stand beside its seat
     assert level[(1, True)] == 0.0  # nor does anything stand over the arms
+
+
+def _level_clusters(rng, *groups, turn=0.0, move=(0.0, 0.0, 0.0)):
+    """Stand-in clusters for ``runs_on``: each a list of (corner, u, v) rectangles (planes)
+    and the voxel ids it holds, the whole scene turned about the vertical by ``turn``
+    degrees and moved by ``move``."""
+    from types import SimpleNamespace
+
+    from test_segmentation import rect
+
+    c, s = math.cos(math.radians(turn)), math.sin(math.radians(turn))
+    turn_z = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    out = []
+    for rects, voxels in groups:
+        centers, planes = [], []
+        for corner, u, v in rects:
+            pts = rect(rng, corner, u, v, 0.02) @ turn_z.T + np.asarray(move)
+            normal = np.cross(u, v) / np.linalg.norm(np.cross(u, v))
+            first = sum(len(p) for p in centers)
+            centers.append(pts)
+            planes.append(
+                SimpleNamespace(
+                    tilt=math.degrees(math.acos(min(1.0, abs(float(normal[2]))))),
+                    length=float(max(np.linalg.norm(u), np.linalg.norm(v))),
+                    inliers=np.arange(first, first + len(pts)),
+                )
+            )
+        out.append(
+            SimpleNamespace(
+                centers=np.vstack(centers), scored_planes=planes, voxels=np.asarray(voxels)
+            )
+        )
+    return out
+
+
+#: A chair-long piece of a bench (its seat and back), the rest of the bench's seat 2 cm on,
+#: an arm's top 10 cm higher touching the seat, a seat at the same height 30 cm aside, and
+#: a candidate overlapping the piece (sharing its voxels) that holds the same seat again.
+_RUN_ON_SCENE = (
+    (
+        [
+            ((0.0, 0.0, 0.45), (0.5, 0, 0), (0, 0.45, 0)),
+            ((0.0, 0.45, 0.45), (0.5, 0, 0), (0, 0, 0.4)),
+        ],
+        [0, 1, 2],
+    ),
+    ([((0.52, 0.0, 0.46), (1.5, 0, 0), (0, 0.45, 0))], [3]),  # the rest of the bench
+    ([((-0.12, 0.0, 0.55), (0.1, 0, 0), (0, 0.45, 0))], [4]),  # an arm's top, a step up
+    ([((0.0, -0.75, 0.45), (0.5, 0, 0), (0, 0.45, 0))], [5]),  # a seat 30 cm aside
+    ([((-0.3, 0.0, 0.45), (0.85, 0, 0), (0, 0.45, 0))], [2, 6]),  # overlapping candidate
+)
+
+
+def test_runs_on_measures_a_seat_that_goes_on_into_another_cluster():
+    """A level plane continued at its height and touching by another cluster's level plane
+    takes that plane's length; a step up, a seat out of reach and a cluster sharing its
+    voxels give 0; tilted planes are not measured."""
+    from ontodetect.segment import runs_on
+
+    values = runs_on(_level_clusters(np.random.default_rng(0), *_RUN_ON_SCENE))
+    assert values[0][0] == pytest.approx(1.5)  # the piece's seat goes on as the bench
+    assert math.isnan(values[0][1])  # its back: upright
+    assert values[1] == [pytest.approx(0.85)]  # the bench goes on into the overlapping one
+    assert values[2] == [0.0] and values[3] == [0.0]
+    assert values[4] == [pytest.approx(1.5)]  # it shares voxels with the piece, not the bench
+
+
+@given(
+    turn=st.floats(-180, 180, allow_nan=False),
+    move=st.tuples(*[st.floats(-50, 50, allow_nan=False)] * 3),
+)
+@settings(max_examples=20, deadline=None)
+def test_runs_on_does_not_depend_on_where_the_scene_stands(turn, move):
+    """The same clusters turned about the vertical and moved give the same lengths."""
+    from ontodetect.segment import runs_on
+
+    here = runs_on(_level_clusters(np.random.default_rng(0), *_RUN_ON_SCENE))
+    there = runs_on(_level_clusters(np.random.default_rng(0), *_RUN_ON_SCENE, turn=turn, move=move))
+    assert there == [[pytest.approx(v, nan_ok=True) for v in row] for row in here]
 
 
 @pytest.mark.parametrize("seed", [0, 1])

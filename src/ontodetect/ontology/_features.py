@@ -336,6 +336,11 @@ for _feature in (
     Feature("sunk", "part", "Pr",
             "share of a horizontal plane's outline over which the cluster lies 4-25 cm "
             "under it, its level planes left out (0..1)", 0.03, scene=True),
+    # A seat ends where its chair ends: a level surface that goes on at its height into the
+    # next cluster is the rest of a bench or a sofa.
+    Feature("runs_on", "part", "Pr",
+            "length of the longest level plane of another cluster that goes on from this "
+            "level plane at its height, touching it (m; 0 when none)", 0.03, scene=True),
     Feature("angle", "relation", "Pr", "angle between the normals, folded to [0, 90] degrees",
             2.0, relation=_relation_attribute("angle", 0.0)),
     Feature("distance", "relation", "Pr",

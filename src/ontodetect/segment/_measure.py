@@ -28,6 +28,8 @@ __all__ = [
     "FLOOR_CELL",
     "OPEN_BELOW_HEIGHT",
     "OPEN_BELOW_RIM",
+    "RUN_ON_GAP",
+    "RUN_ON_STEP",
     "SEEN_BELOW_CELL",
     "SEEN_BELOW_DROP",
     "SELF_SHADOW",
@@ -41,6 +43,7 @@ __all__ = [
     "describe_clusters",
     "hidden_heights",
     "open_below",
+    "runs_on",
     "seen_below",
     "shelter_heights",
     "sunk_below",
@@ -56,12 +59,13 @@ def describe_cluster(
     seen_below: Sequence[float] | None = None,
     covered: Sequence[float] | None = None,
     sunk: Sequence[float] | None = None,
+    runs_on: Sequence[float] | None = None,
 ) -> ClusterDescription:
     """What the ontology scoring needs to know about a cluster (``shelter``: see
     :func:`shelter_heights`; ``ceiling``: the top of the search volume;
     ``hidden_below``: see :func:`hidden_heights`; ``open_below``: see
-    :func:`open_below`; ``seen_below``, ``covered`` and ``sunk``: see :func:`seen_below`,
-    :func:`covered_above` and :func:`sunk_below`)."""
+    :func:`open_below`; ``seen_below``, ``covered``, ``sunk`` and ``runs_on``: see
+    :func:`seen_below`, :func:`covered_above`, :func:`sunk_below` and :func:`runs_on`)."""
     return ClusterDescription(
         planes=cluster.scored_planes,
         relations=cluster.scored_relations,
@@ -79,6 +83,7 @@ def describe_cluster(
                 ("seen_below", seen_below),
                 ("covered", covered),
                 ("sunk", sunk),
+                ("runs_on", runs_on),
             )
             if values is not None
         },
@@ -108,10 +113,11 @@ def describe_clusters(
     # From one view the floor under a top is hidden by the top itself: not measured there.
     below = open_below(seg) if viewpoint is None else [None] * len(seg)
     lower, higher, sunk = _outline_shares(seg, (-1, 1), sunk=True)
+    onward = runs_on(seg)
     return [
-        describe_cluster(c, float(h), ceiling, float(b), o, s, a, k)
-        for c, h, b, o, s, a, k in zip(
-            seg, shelter_heights(seg), hidden, below, lower, higher, sunk, strict=True
+        describe_cluster(c, float(h), ceiling, float(b), o, s, a, k, r)
+        for c, h, b, o, s, a, k, r in zip(
+            seg, shelter_heights(seg), hidden, below, lower, higher, sunk, onward, strict=True
         )
     ]
 
@@ -308,6 +314,76 @@ def sunk_below(seg: Segmentation) -> list[list[float]]:
     bowl is curved and seldom makes one, so this counts what no level plane holds.
     """
     return _outline_shares(seg, (), sunk=True)[0]
+
+
+#: Two level planes of different clusters are one surface when the medians of their heights
+#: differ by at most this (m: MSAC's band about a sagging seat) ...
+RUN_ON_STEP = 0.03
+#: ... and their points come within this of each other (m): touching, a voxel or two apart.
+RUN_ON_GAP = 0.06
+
+
+def runs_on(seg: Sequence[Any]) -> list[list[float]]:
+    """Per cluster and plane, the length (m) of the longest level plane of another cluster
+    that goes on from a level plane of this one, at its height (``RUN_ON_STEP``) and
+    touching it (``RUN_ON_GAP``); 0 when none does; NaN for tilted planes. A cluster that
+    shares voxels with this one (overlapping candidates of segmentation by recognition)
+    does not count.
+
+    A seat ends where its chair ends: a level surface at the seat's height that goes on into
+    the next cluster for more than a place is the rest of a bench or a sofa the segmentation
+    cut (a bench is cut where it is longer than a cluster may be), not a chair's.
+    """
+    from scipy.spatial import cKDTree  # lazy: only when clusters are described
+
+    level: list[list[tuple[int, float, float, NDArray[np.float64]]]] = []
+    for c in seg:
+        centers = np.asarray(c.centers)
+        rows = []
+        for k, p in enumerate(c.scored_planes):
+            if float(p.tilt) <= HORIZONTAL_TILT:
+                pts = centers[np.asarray(p.inliers)]
+                rows.append((k, float(np.median(pts[:, 2])), float(p.length), pts))
+        level.append(rows)
+    boxes = np.array(
+        [
+            np.r_[np.asarray(c.centers).min(axis=0), np.asarray(c.centers).max(axis=0)]
+            if len(c.centers)
+            else np.r_[np.full(3, np.inf), np.full(3, -np.inf)]
+            for c in seg
+        ]
+    ).reshape(len(seg), 6)
+    out: list[list[float]] = []
+    for i, c in enumerate(seg):
+        row = [math.nan] * len(c.scored_planes)
+        mine_voxels = getattr(c, "voxels", None)
+        for k, z, _, mine in level[i]:
+            row[k] = 0.0
+            lo, hi = mine.min(axis=0) - RUN_ON_GAP, mine.max(axis=0) + RUN_ON_GAP
+            near = np.flatnonzero(
+                np.all(boxes[:, :3] <= hi, axis=1) & np.all(boxes[:, 3:] >= lo, axis=1)
+            )
+            tree = None
+            for j in near:
+                if j == i or not level[j]:
+                    continue
+                theirs_voxels = getattr(seg[j], "voxels", None)
+                if (
+                    mine_voxels is not None
+                    and theirs_voxels is not None
+                    and np.intersect1d(mine_voxels, theirs_voxels).size
+                ):
+                    continue
+                for _, other_z, length, theirs in level[j]:
+                    if length <= row[k] or abs(other_z - z) > RUN_ON_STEP:
+                        continue
+                    if tree is None:
+                        tree = cKDTree(mine)
+                    gap, _ = tree.query(theirs, k=1, distance_upper_bound=RUN_ON_GAP)
+                    if np.isfinite(gap).any():
+                        row[k] = length
+        out.append(row)
+    return out
 
 
 def covered_above(seg: Segmentation) -> list[list[float]]:
