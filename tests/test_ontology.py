@@ -611,30 +611,29 @@ def test_near_names_an_unknown_class_and_needs_a_distance():
         parse_ontology(text)
 
 
-def test_a_seat_that_goes_on_into_the_next_cluster_is_no_chair():
-    """A seat ends where its chair ends (``runs_on``): what goes on level from it into the
-    next cluster for a place's width or a footstool's costs nothing; for what seats two, it
-    is the rest of a bench or a sofa, and the piece is no chair."""
+@pytest.mark.parametrize(
+    ("feature", "allowed", "refused"),
+    [
+        # Under a seat are the sitter's legs and the chair's legs or column: a lower board
+        # seen inside the seat's outline (a nightstand's or a desk compartment's shelf) takes
+        # the chair away; the edge of a cross rail costs it nothing.
+        ("seen_below", 0.3, 0.7),
+        # A seat ends where its chair ends: what goes on level from it into the next cluster
+        # for a place's width or a footstool's costs nothing; for what seats two, it is the
+        # rest of a bench or a sofa, and the piece is no chair.
+        ("runs_on", 0.75, 1.5),
+    ],
+)
+def test_what_a_chair_s_seat_cannot_have(feature, allowed, refused):
+    """A seat scene feature at 0 or within its bound leaves the chair as it is; past it,
+    the chair is gone."""
     o = builtin_ontology()
-    free = score_cluster(replace(chair(), scene={"runs_on": [0.0, math.nan]}), o)
-    row = score_cluster(replace(chair(), scene={"runs_on": [0.75, math.nan]}), o)
-    bench = score_cluster(replace(chair(), scene={"runs_on": [1.5, math.nan]}), o)
-    assert free.best == row.best == "chair"
-    assert row.probabilities["chair"] == pytest.approx(free.probabilities["chair"])
-    assert bench.probabilities["chair"] < 0.1 * free.probabilities["chair"]
-
-
-def test_a_board_seen_under_the_seat_is_no_chair():
-    """Under a seat are the sitter's legs and the chair's legs or column: a lower board seen
-    inside the seat's outline (a nightstand's or a desk compartment's shelf, ``seen_below``)
-    takes the chair away; none, or the edge of a cross rail, costs it nothing."""
-    o = builtin_ontology()
-    free = score_cluster(replace(chair(), scene={"seen_below": [0.0, math.nan]}), o)
-    rail = score_cluster(replace(chair(), scene={"seen_below": [0.3, math.nan]}), o)
-    shelf = score_cluster(replace(chair(), scene={"seen_below": [0.7, math.nan]}), o)
-    assert free.best == rail.best == "chair"
-    assert rail.probabilities["chair"] == pytest.approx(free.probabilities["chair"])
-    assert shelf.probabilities["chair"] < 0.1 * free.probabilities["chair"]
+    free = score_cluster(replace(chair(), scene={feature: [0.0, math.nan]}), o)
+    fine = score_cluster(replace(chair(), scene={feature: [allowed, math.nan]}), o)
+    past = score_cluster(replace(chair(), scene={feature: [refused, math.nan]}), o)
+    assert free.best == fine.best == "chair"
+    assert fine.probabilities["chair"] == pytest.approx(free.probabilities["chair"])
+    assert past.probabilities["chair"] < 0.1 * free.probabilities["chair"]
 
 
 def _bath_or_bed(seen_below, wall=True):

@@ -337,7 +337,8 @@ def runs_on(seg: Sequence[Any]) -> list[list[float]]:
     from scipy.spatial import cKDTree  # lazy: only when clusters are described
 
     level: list[list[tuple[int, float, float, NDArray[np.float64]]]] = []
-    for c in seg:
+    boxes = np.tile(np.r_[np.full(3, np.inf), np.full(3, -np.inf)], (len(seg), 1))
+    for i, c in enumerate(seg):
         centers = np.asarray(c.centers)
         rows = []
         for k, p in enumerate(c.scored_planes):
@@ -345,14 +346,8 @@ def runs_on(seg: Sequence[Any]) -> list[list[float]]:
                 pts = centers[np.asarray(p.inliers)]
                 rows.append((k, float(np.median(pts[:, 2])), float(p.length), pts))
         level.append(rows)
-    boxes = np.array(
-        [
-            np.r_[np.asarray(c.centers).min(axis=0), np.asarray(c.centers).max(axis=0)]
-            if len(c.centers)
-            else np.r_[np.full(3, np.inf), np.full(3, -np.inf)]
-            for c in seg
-        ]
-    ).reshape(len(seg), 6)
+        if len(centers):
+            boxes[i] = np.r_[centers.min(axis=0), centers.max(axis=0)]
     out: list[list[float]] = []
     for i, c in enumerate(seg):
         row = [math.nan] * len(c.scored_planes)
