@@ -307,6 +307,70 @@ def test_runs_on_does_not_depend_on_where_the_scene_stands(turn, move):
     assert there == [[pytest.approx(v, nan_ok=True) for v in row] for row in here]
 
 
+def _runs_on_by_definition(seg):
+    """``runs_on`` pair by pair, every level plane against every other cluster's."""
+    from ontodetect.segment._measure import RUN_ON_GAP, RUN_ON_STEP
+
+    out = []
+    for i, c in enumerate(seg):
+        row = []
+        for p in c.scored_planes:
+            if p.tilt > 10:
+                row.append(math.nan)
+                continue
+            mine = c.centers[p.inliers]
+            best = 0.0
+            for j, o in enumerate(seg):
+                if j == i or np.intersect1d(c.voxels, o.voxels).size:
+                    continue
+                for q in o.scored_planes:
+                    theirs = o.centers[q.inliers]
+                    if q.tilt > 10 or abs(np.median(theirs[:, 2]) - np.median(mine[:, 2])) > (
+                        RUN_ON_STEP
+                    ):
+                        continue
+                    d = np.linalg.norm(mine[:, None, :] - theirs[None, :, :], axis=2)
+                    if d.min() <= RUN_ON_GAP:
+                        best = max(best, q.length)
+            row.append(best)
+        out.append(row)
+    return out
+
+
+@given(seed=st.integers(0, 2**32 - 1))
+@settings(max_examples=10, deadline=None)
+def test_runs_on_is_its_definition_on_many_clusters(seed):
+    """The spatial index finds the planes pair-by-pair comparison finds: random level and
+    upright planes at a few heights, some clusters sharing voxels."""
+    from types import SimpleNamespace
+
+    from ontodetect.segment import runs_on
+
+    rng = np.random.default_rng(seed)
+    seg = []
+    for i in range(60):
+        corner, planes, pts = rng.uniform(0, 6, 2), [], []
+        for q in range(int(rng.integers(1, 4))):
+            z = float(rng.choice([0.44, 0.45, 0.47, 0.75]))
+            xy = corner + rng.uniform(0, rng.uniform(0.1, 1.2), (20, 2))
+            pts.append(np.column_stack([xy, z + rng.normal(0, 0.004, 20)]))
+            planes.append(
+                SimpleNamespace(
+                    tilt=float(rng.choice([1.0, 80.0])),
+                    length=float(rng.uniform(0.1, 1.5)),
+                    inliers=np.arange(20 * q, 20 * (q + 1)),
+                )
+            )
+        first = (i - 1 if rng.random() < 0.1 else i) * 100  # a tenth share a neighbour's
+        seg.append(
+            SimpleNamespace(
+                centers=np.vstack(pts), scored_planes=planes, voxels=np.arange(first, first + 50)
+            )
+        )
+    got, want = runs_on(seg), _runs_on_by_definition(seg)
+    assert got == [[pytest.approx(v, nan_ok=True) for v in row] for row in want]
+
+
 @pytest.mark.parametrize("seed", [0, 1])
 def test_sunk_finds_a_basins_bowl_under_its_rim_and_nothing_under_a_table(seed):
     """Inside a basin's rim its bowl lies 12-20 cm lower; inside a desk's, a table's or a

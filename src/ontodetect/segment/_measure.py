@@ -336,48 +336,50 @@ def runs_on(seg: Sequence[Any]) -> list[list[float]]:
     """
     from scipy.spatial import cKDTree  # lazy: only when clusters are described
 
-    level: list[list[tuple[int, float, float, NDArray[np.float64]]]] = []
-    boxes = np.tile(np.r_[np.full(3, np.inf), np.full(3, -np.inf)], (len(seg), 1))
+    out: list[list[float]] = [[math.nan] * len(c.scored_planes) for c in seg]
+    # Every level plane of every cluster: its cluster, index, height, length and points.
+    level: list[tuple[int, int, float, float, NDArray[np.float64]]] = []
     for i, c in enumerate(seg):
         centers = np.asarray(c.centers)
-        rows = []
         for k, p in enumerate(c.scored_planes):
             if float(p.tilt) <= HORIZONTAL_TILT:
+                out[i][k] = 0.0
                 pts = centers[np.asarray(p.inliers)]
-                rows.append((k, float(np.median(pts[:, 2])), float(p.length), pts))
-        level.append(rows)
-        if len(centers):
-            boxes[i] = np.r_[centers.min(axis=0), centers.max(axis=0)]
-    out: list[list[float]] = []
-    for i, c in enumerate(seg):
-        row = [math.nan] * len(c.scored_planes)
-        mine_voxels = getattr(c, "voxels", None)
-        for k, z, _, mine in level[i]:
-            row[k] = 0.0
-            lo, hi = mine.min(axis=0) - RUN_ON_GAP, mine.max(axis=0) + RUN_ON_GAP
-            near = np.flatnonzero(
-                np.all(boxes[:, :3] <= hi, axis=1) & np.all(boxes[:, 3:] >= lo, axis=1)
-            )
-            tree = None
-            for j in near:
-                if j == i or not level[j]:
-                    continue
+                if len(pts):
+                    level.append((i, k, float(np.median(pts[:, 2])), float(p.length), pts))
+    if len(level) < 2:
+        return out
+    lo = np.array([pts.min(axis=0) for *_, pts in level]) - RUN_ON_GAP
+    hi = np.array([pts.max(axis=0) for *_, pts in level]) + RUN_ON_GAP
+    # Planes that touch have overlapping boxes, grown by the gap: found by their centres,
+    # within the two half diagonals (a building floor holds tens of thousands of clusters).
+    middle, half = (lo[:, :2] + hi[:, :2]) / 2, np.linalg.norm(hi[:, :2] - lo[:, :2], axis=1) / 2
+    near = cKDTree(middle).query_ball_point(middle, half + half.max())
+    shared: dict[tuple[int, int], bool] = {}
+    for a, (i, k, z, _, mine) in enumerate(level):
+        tree = None
+        for b in sorted(near[a]):
+            j, _, other_z, length, theirs = level[b]
+            if j == i or length <= out[i][k] or abs(other_z - z) > RUN_ON_STEP:
+                continue
+            if not (np.all(lo[b] <= hi[a]) and np.all(hi[b] >= lo[a])):
+                continue
+            pair = (min(i, j), max(i, j))
+            if pair not in shared:
+                mine_voxels = getattr(seg[i], "voxels", None)
                 theirs_voxels = getattr(seg[j], "voxels", None)
-                if (
+                shared[pair] = bool(
                     mine_voxels is not None
                     and theirs_voxels is not None
                     and np.intersect1d(mine_voxels, theirs_voxels).size
-                ):
-                    continue
-                for _, other_z, length, theirs in level[j]:
-                    if length <= row[k] or abs(other_z - z) > RUN_ON_STEP:
-                        continue
-                    if tree is None:
-                        tree = cKDTree(mine)
-                    gap, _ = tree.query(theirs, k=1, distance_upper_bound=RUN_ON_GAP)
-                    if np.isfinite(gap).any():
-                        row[k] = length
-        out.append(row)
+                )
+            if shared[pair]:
+                continue
+            if tree is None:
+                tree = cKDTree(mine)
+            gap, _ = tree.query(theirs, k=1, distance_upper_bound=RUN_ON_GAP)
+            if np.isfinite(gap).any():
+                out[i][k] = length
     return out
 
 
