@@ -358,7 +358,7 @@ def runs_on(seg: Sequence[Any]) -> list[list[float]]:
     shared: dict[tuple[int, int], bool] = {}
     for a, (i, k, z, _, mine) in enumerate(level):
         tree = None
-        for b in sorted(near[a]):
+        for b in near[a]:  # the result is the longest, whatever the order
             j, _, other_z, length, theirs = level[b]
             if j == i or length <= out[i][k] or abs(other_z - z) > RUN_ON_STEP:
                 continue
