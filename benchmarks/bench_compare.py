@@ -6,8 +6,9 @@ the method is kept only when it helps the simulated rooms, costs nothing on the 
 and keeps stability (docs/ontology.md, "How a prior is chosen"); this prints the three side
 by side, so that the note of a change can give all three:
 
-- real and simulated scans: TP / detections / ground truth, precision and recall per class;
-- simulated scans by room type: TP / detections per reported class;
+- real and simulated scans and the simulated single frames: TP / detections / ground truth,
+  precision and recall per class;
+- simulated scans and frames by room type: TP / detections per reported class;
 - the false detections by what they really are, the objects missed by where they were
   lost (not clustered, split, merged into another object's cluster, scored as another class,
   lost in the vote), and the chair groups' recall;
@@ -57,11 +58,11 @@ def load_run(path: Path) -> dict[str, Any]:
         doc = json.loads(text)
     except json.JSONDecodeError as exc:
         raise CompareError(f"{path}: not JSON (line {exc.lineno}: {exc.msg})") from None
-    parts = ("real", "robustness", "simulated", "stability")
+    parts = ("real", "robustness", "simulated", "stability", "frames")
     if not isinstance(doc, dict) or not any(k in doc for k in parts):
         raise CompareError(
             f"{path}: not a generalization benchmark result (no 'real', 'robustness', "
-            "'simulated' or 'stability' part)"
+            "'simulated', 'stability' or 'frames' part)"
         )
     fmt = doc.get("format")
     if fmt is not None and fmt not in FORMATS:
@@ -218,7 +219,11 @@ def compare(
     """The tables of a comparison (and lines for what cannot be compared)."""
     key = _key(iou)
     out: list[Table | str] = []
-    for part, title in (("real", "Real scans"), ("simulated", "Simulated rooms")):
+    for part, title in (
+        ("real", "Real scans"),
+        ("simulated", "Simulated rooms"),
+        ("frames", "Single frames"),
+    ):
         b, a = before.get(part), after.get(part)
         if b is None or a is None:
             out.append(f"{title}: not in {'the first' if b is None else 'the second'} run")
@@ -231,11 +236,11 @@ def compare(
                 changed,
             )
         )
-        if part == "simulated":
+        if part in ("simulated", "frames"):
             classes, rows = room_rows(b.get("by_room_type", {}), a.get("by_room_type", {}), key)
             out.append(
                 _table(
-                    "Simulated rooms by room type, TP/det",
+                    f"{title} by room type, TP/det",
                     ["room", *(f"{c} {w}" for c in classes for w in ("before", "after"))],
                     rows,
                     changed,
@@ -245,7 +250,7 @@ def compare(
             groups_a = a.get("chair_groups", {}).get(key, {})
             out.append(
                 _table(
-                    "Chairs by group, found/GT",
+                    f"{title}: chairs by group, found/GT",
                     ["group", "before", "after"],
                     [
                         (

@@ -1,7 +1,7 @@
 """Generalization: real development scans, simulated furnished rooms, stability, robustness.
 
 Run as ``python -m benchmarks generalization --real DIR [--out DIR] [--jobs 2] [--quick]``.
-Four measurements, the first three at point IoU 0.25 and 0.5, the last at 0.25
+Five measurements, (a), (b), (c) and (e) at point IoU 0.25 and 0.5, (d) at 0.25
 (docs/benchmarks.md, "Generalization benchmark"):
 
 (a) **real**: precision and recall per class on the labelled scans in ``--real`` (ScanNet,
@@ -20,7 +20,10 @@ Four measurements, the first three at point IoU 0.25 and 0.5, the last at 0.25
 (d) **robustness**: precision and recall on the real scans again after what sensors and
     pipelines do to scans (1 cm of noise, most of the floor unseen, every point twice, half
     the points: a room twice the size in as many points), each copy scored against its own
-    labels.
+    labels;
+(e) **frames**: precision and recall on single RGB-D frames of the simulated rooms (every
+    room type x 7 seeds, one frame each, the sensor's position known), as SUN RGB-D's
+    frames and a robot's camera see a room, broken down as the simulated set is.
 
 The simulated rooms come from ``ontodetect.synth.furnished.furnished_scene`` (Sweet Home 3D
 catalogue furniture) when that module exists, else from the parametric rooms of
@@ -110,6 +113,12 @@ VARIANTS: dict[str, tuple[str, tuple[str, ...]]] = {
 }
 #: Which seed of every room type is also scanned with each extra variant.
 VARIANT_SEED = {"floor-layer": 0, "holes": 1, "tilt": 2, "frame": 3}
+#: (e) frames: every room type seen in one single RGB-D frame for each of this many seeds
+#: (the simulated set has one frame per room type, seed 3's, too few to measure single
+#: views by: 26 chairs).
+FRAME_SEEDS = 7
+#: The measurements ``--only`` chooses from, in the order they run.
+PARTS = ("real", "robustness", "frames", "sim", "stability")
 #: Stability: real and simulated scans (those with the most objects), and in --quick.
 STABILITY_SCANS = 3
 QUICK_STABILITY_TURNS = (90.0, 30.0)
@@ -213,6 +222,15 @@ def simulated_set(room_types: Sequence[str], *, quick: bool = False) -> list[Sim
     return scans
 
 
+def frames_set(room_types: Sequence[str], *, quick: bool = False) -> list[SimScan]:
+    """The fixed list of single frames of (e): seeds 0 to ``FRAME_SEEDS - 1`` of every room
+    type, one RGB-D frame each (quick: seed 0 of two types)."""
+    types = list(room_types)
+    if quick:
+        return [SimScan(r, 0, "frame") for r in types[:2]]
+    return [SimScan(r, s, "frame") for r in types for s in range(FRAME_SEEDS)]
+
+
 def _source_digest() -> str:
     """Digest of the simulator's sources and class tables: a changed generator makes a new
     cache."""
@@ -308,16 +326,19 @@ def build_simulated_set(
     return folder, sources, False
 
 
-def pinned_simulated_set(folder: Path, scans: Sequence[SimScan]) -> tuple[Path, list[SceneSource]]:
-    """A simulated set generated earlier (``--sim-set``), used even if the generator has
-    changed since, so that two versions of the detector are measured on the same rooms."""
+def pinned_simulated_set(
+    folder: Path, scans: Sequence[SimScan], *, option: str = "--sim-set"
+) -> tuple[Path, list[SceneSource]]:
+    """A simulated set generated earlier (``--sim-set``, or ``option``), used even if the
+    generator has changed since, so that two versions of the detector are measured on the
+    same rooms."""
     manifest = folder / "manifest.json"
     if not manifest.is_file():
-        raise InvalidParameterError("--sim-set", "a simulated set's folder (manifest.json)", folder)
+        raise InvalidParameterError(option, "a simulated set's folder (manifest.json)", folder)
     have = set(json.loads(manifest.read_text()).get("key", {}).get("scans", []))
     missing = [s.name for s in scans if s.name not in have]
     if missing:
-        raise InvalidParameterError("--sim-set", "a set with every scan of this run", missing[:3])
+        raise InvalidParameterError(option, "a set with every scan of this run", missing[:3])
     return folder, _sources(folder, scans)
 
 
@@ -662,9 +683,11 @@ def chair_groups(families: Mapping[str, Mapping[str, tuple[int, int]]]) -> dict[
     return out
 
 
-def family_table(families: Mapping[str, Any], family_class: Mapping[str, str]) -> Table:
+def family_table(
+    families: Mapping[str, Any], family_class: Mapping[str, str], *, title: str = "Simulated"
+) -> Table:
     """Recall per furniture family (kind) at both thresholds, grouped by class."""
-    t = Table(title="Simulated: recall per furniture family", title_justify="left")
+    t = Table(title=f"{title}: recall per furniture family", title_justify="left")
     for col in ("class", "family", "GT", "found @.25", "recall @.25", "found @.5", "recall @.5"):
         t.add_column(col, justify="left" if col in ("class", "family") else "right")
     lo, hi = families["iou@0.25"], families["iou@0.5"]
@@ -888,10 +911,17 @@ def main(argv: list[str] | None = None) -> int:
         "if the generator changed: two versions measured on the same rooms",
     )
     ap.add_argument(
+        "--frames-set",
+        type=Path,
+        default=None,
+        help="the single frames of (e) generated earlier (a sim-* folder of --out), used as "
+        "they are even if the generator changed",
+    )
+    ap.add_argument(
         "--only",
-        default="real,robustness,sim,stability",
-        help="which measurements to run, of real, robustness, sim and stability (default: "
-        "all four; stability needs real and sim)",
+        default=",".join(PARTS),
+        help="which measurements to run, of " + ", ".join(PARTS) + " (default: all five; "
+        "stability needs real and sim)",
     )
     ap.add_argument(
         "--rooms",
@@ -919,8 +949,8 @@ def main(argv: list[str] | None = None) -> int:
         except ValueError:
             ap.error(f"--turns takes degrees separated by commas, got {args.turns!r}")
     parts = {p.strip() for p in args.only.split(",") if p.strip()}
-    if not parts or parts - {"real", "robustness", "sim", "stability"}:
-        ap.error(f"--only takes real, robustness, sim and stability, got {args.only!r}")
+    if not parts or parts - set(PARTS):
+        ap.error(f"--only takes {', '.join(PARTS)}, got {args.only!r}")
     whole = {"real", "sim", "stability"} <= parts
     alone = parts == {"stability"} and args.stability_scans
     if "stability" in parts and not (whole or alone):
@@ -1013,6 +1043,9 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
             doc["robustness"] = robustness(real_scenes, jobs, opts)
             doc["robustness"]["seconds"] = round(time.perf_counter() - t0, 1)
             console.print(robustness_table(doc["robustness"], doc.get("real", {}).get("per_class")))
+        # (e) single frames
+        if "frames" in args.only:
+            _run_frames(args, source, jobs, opts, doc)
 
         # (b) the simulated set
         if "sim" not in args.only:
@@ -1039,9 +1072,8 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
             doc["rooms"] = sorted(wanted)
         sim = evaluate_dataset(folder, scenes=sim_sources, jobs=jobs, detect_options=opts)
         by_name = {s.name: s for s in scans}
-        sim_false, families, family_class, sim_missed = mistakes_and_families(sim.scenes)
-        by_room = grouped(sim.scenes, lambda o: by_name[o.name].room)
-        by_variant = grouped(sim.scenes, lambda o: by_name[o.name].variant)
+        figures, families, family_class = simulated_figures(sim, scans)
+        by_room, by_variant = figures["by_room_type"], figures["by_variant"]
         room_counts = Counter(by_name[o.name].room for o in sim.scenes)
         variant_counts = Counter(by_name[o.name].variant for o in sim.scenes)
         doc["simulated"] = {
@@ -1050,19 +1082,7 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
             "generate_seconds": round(t_gen, 1),
             "rooms": len({(s.room, s.seed) for s in scans}),
             "scans": [s.name for s in scans],
-            "per_class": dataset_figures(sim),
-            "by_room_type": by_room,
-            "by_variant": by_variant,
-            "by_family": {
-                k: {
-                    f: {"class": family_class.get(f), "found": a, "gt": b}
-                    for f, (a, b) in v.items()
-                }
-                for k, v in families.items()
-            },
-            "chair_groups": chair_groups(families),
-            "false_detections": false_summary(sim_false),
-            "missed": missed_summary(sim_missed),
+            **figures,
             "seconds": round(time.perf_counter() - t0, 1),
         }
         rooms = doc["simulated"]["rooms"]
@@ -1098,6 +1118,75 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
         picked = richest(real.scenes, count, one_per=lambda o: o.source.group)
         picked += richest(fused, count, one_per=lambda o: by_name[o.name].room)
         return _run_stability(args, picked, jobs, opts, doc, start)
+
+
+def simulated_figures(
+    ev: DatasetEvaluation, scans: Sequence[SimScan]
+) -> tuple[dict[str, Any], dict[str, Any], dict[str, str]]:
+    """The figures of simulated scans (per class, by room type, by variant, by family, the
+    chair groups, the false detections and the missed objects), with the families and the
+    class of each family for the tables."""
+    by_name = {s.name: s for s in scans}
+    false, families, family_class, missed = mistakes_and_families(ev.scenes)
+    figures = {
+        "per_class": dataset_figures(ev),
+        "by_room_type": grouped(ev.scenes, lambda o: by_name[o.name].room),
+        "by_variant": grouped(ev.scenes, lambda o: by_name[o.name].variant),
+        "by_family": {
+            k: {f: {"class": family_class.get(f), "found": a, "gt": b} for f, (a, b) in v.items()}
+            for k, v in families.items()
+        },
+        "chair_groups": chair_groups(families),
+        "false_detections": false_summary(false),
+        "missed": missed_summary(missed),
+    }
+    return figures, families, family_class
+
+
+def _run_frames(
+    args: argparse.Namespace,
+    source: RoomSource,
+    jobs: int,
+    opts: dict[str, Any],
+    doc: dict[str, Any],
+) -> None:
+    """(e): single frames of the simulated rooms, printed and put in ``doc["frames"]``."""
+    t0 = time.perf_counter()
+    scans = frames_set(source.room_types, quick=args.quick)
+    if args.frames_set is not None:
+        folder, sources = pinned_simulated_set(args.frames_set, scans, option="--frames-set")
+        reused = True
+    else:
+        folder, sources, reused = build_simulated_set(args.out, source, scans, jobs)
+    t_gen = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    ev = evaluate_dataset(folder, scenes=sources, jobs=jobs, detect_options=opts)
+    figures, families, family_class = simulated_figures(ev, scans)
+    doc["frames"] = {
+        "cache": str(folder),
+        "reused_cache": reused,
+        "generate_seconds": round(t_gen, 1),
+        "scans": [s.name for s in scans],
+        **figures,
+        "seconds": round(time.perf_counter() - t0, 1),
+    }
+    by_name = {s.name: s for s in scans}
+    what = "reused from" if reused else "generated in"
+    console.print(f"single frames: {len(scans)} frames, {what} {folder}")
+    console.print(class_table(f"Single frames: {len(ev.scenes)} frames", figures["per_class"]))
+    room_counts = Counter(by_name[o.name].room for o in ev.scenes)
+    console.print(
+        group_table(
+            "Single frames: by room type", "room type", figures["by_room_type"], room_counts
+        )
+    )
+    console.print(family_table(families, family_class, title="Single frames"))
+    console.print(
+        false_table("Single frames: what the false detections are", figures["false_detections"])
+    )
+    console.print(
+        missed_table("Single frames: where the missed objects were lost", figures["missed"])
+    )
 
 
 def _named_scans(
@@ -1176,7 +1265,12 @@ def _finish(out: Path, doc: dict[str, Any], start: float) -> int:
     path.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
     parts = ", ".join(
         f"{name} {doc[key]['seconds']:.0f} s"
-        for name, key in (("real", "real"), ("simulated", "simulated"), ("stability", "stability"))
+        for name, key in (
+            ("real", "real"),
+            ("frames", "frames"),
+            ("simulated", "simulated"),
+            ("stability", "stability"),
+        )
         if key in doc
     )
     console.print(f"wall time {doc['seconds']:.0f} s ({parts}); written to {path}")

@@ -30,6 +30,7 @@ def run_doc(
     stability=True,
     real=True,
     noisy=(5, 6),
+    frames=(4, 5, 9),
 ):
     key = "iou@0.25"
     doc = {
@@ -51,6 +52,14 @@ def run_doc(
             },
         },
     }
+    if frames is not None:
+        doc["frames"] = {
+            "per_class": {key: {"chair": fig(*frames)}},
+            "by_room_type": {"office": {key: {"chair": fig(*frames)}}},
+            "chair_groups": {key: {"easy chairs": {"found": 1, "gt": 2, "recall": 0.5}}},
+            "false_detections": {key: {}},
+            "missed": {key: {}},
+        }
     if real:
         doc["real"] = {
             "per_class": {key: {"chair": fig(23, 25, 26)}},
@@ -178,6 +187,18 @@ def test_compare_keeps_only_what_changed_and_says_what_a_run_lacks():
         ["all", "0.9000 / 0.5000", "0.9500 / 0.5000"],
         ["turn 90°", "0.9000 / 0.5000", "0.9500 / 0.5000"],
     ]
+
+
+def test_single_frames_are_compared_as_the_simulated_rooms_are():
+    items = C.compare(run_doc(), run_doc(frames=(6, 7, 9)), changed=True)
+    tables = {i.title: i for i in items if isinstance(i, Table)}
+    frames = cells(tables["Single frames, TP/det/GT at point IoU 0.25"])
+    assert frames == [["chair", "4/5/9", "6/7/9", "0.80 / 0.44", "0.86 / 0.67"]]
+    rooms = cells(tables["Single frames by room type, TP/det"])
+    assert rooms == [["office", "4/5", "6/7"]]
+    # a run without the part (older runs) says so
+    text = C.compare(run_doc(frames=None), run_doc(), changed=True)
+    assert "Single frames: not in the first run" in text
 
 
 def test_main_prints_both_runs_settings_and_the_tables(tmp_path, capsys, monkeypatch):

@@ -248,6 +248,21 @@ def test_simulated_set_is_fixed_and_large_enough():
     assert len(quick) == 8 and {s.variant for s in quick} == set(B.VARIANTS)
 
 
+def test_single_frames_are_every_room_type_seen_once_per_seed():
+    frames = B.frames_set([f"type{k}" for k in range(9)])
+    assert len(frames) == 63 and {s.variant for s in frames} == {"frame"}
+    assert {(s.room, s.seed) for s in frames} == {
+        (f"type{k}", s) for k in range(9) for s in range(B.FRAME_SEEDS)
+    }
+    # the simulated set's own frames (seed 3) are among them, under the same names
+    sim = {s.name for s in B.simulated_set([f"type{k}" for k in range(9)]) if s.variant == "frame"}
+    assert sim < {s.name for s in frames}
+    assert B.cache_key(B.RoomSource("parametric", ("a",), ""), frames) != B.cache_key(
+        B.RoomSource("parametric", ("a",), ""), B.simulated_set([f"type{k}" for k in range(9)])
+    )
+    assert len(B.frames_set(B.PARAMETRIC_ROOMS, quick=True)) == 2
+
+
 def test_the_cache_key_changes_with_the_scans():
     source = B.RoomSource("parametric", B.PARAMETRIC_ROOMS, "")
     scans = B.simulated_set(B.PARAMETRIC_ROOMS, quick=True)
