@@ -15,9 +15,10 @@ from ontodetect import InvalidParameterError, point_cloud
 from ontodetect.cloud import DataWarning, pixel_grid, sensor_position
 from ontodetect.config import Config
 from ontodetect.ontology import ClusterDescription, builtin_ontology
-from ontodetect.ontology._score import cluster_log_factor, missing_factor
+from ontodetect.ontology._score import LIFTED_BOTTOM, cluster_log_factor, missing_factor
 from ontodetect.pipeline import detect, hidden_heights
 from ontodetect.preprocess import smooth_depth
+from ontodetect.segment import standing_base
 from ontodetect.synth import synthesize
 from ontodetect.synth.furniture import make_furniture, place
 from ontodetect.synth.sensors import _look_at, scan_rgbd_frame
@@ -165,6 +166,32 @@ def test_a_seat_hidden_behind_its_backrest_counts_as_occluded():
     assert missing_factor(seat, _backrest_only(0.75, hidden_below=1.1)) == seat.missing
     # standing on the floor: its lower part is not hidden but absent
     assert missing_factor(seat, _backrest_only(0.05, hidden_below=0.85)) == seat.missing
+
+
+def test_a_chair_seen_from_behind_on_its_legs_is_lifted_off_the_floor():
+    seat = next(p for p in builtin_ontology()["chair"].parts if p.name == "seat")
+    legs = dataclasses.replace(_backrest_only(0.0, hidden_below=0.85), base=0.47)
+    board = dataclasses.replace(legs, base=0.09)
+    # its legs reach the floor, but what stands above them hides the seat
+    assert missing_factor(seat, legs) == seat.occluded
+    # a board or a front that reaches the floor hides nothing it stands on
+    assert missing_factor(seat, board) == seat.missing
+    # a scan fused from many views hides nothing behind a backrest, on legs or not; beside a
+    # neighbour's top only what shows from just under the seat's height counts
+    fused = dataclasses.replace(legs, hidden_below=-math.inf)
+    assert missing_factor(seat, fused) == seat.missing
+    assert missing_factor(seat, dataclasses.replace(fused, shelter=0.72)) == seat.missing
+
+
+@settings(max_examples=60, deadline=None)
+@given(legs=st.integers(0, 9), low=st.floats(0.25, 0.6), top=st.floats(0.8, 1.3))
+def test_the_base_of_what_stands_on_legs_is_above_them(legs, low, top):
+    back = np.linspace(low, top, 100)  # the voxel heights of what a backrest shows
+    on_legs = np.r_[np.linspace(0.0, low, legs, endpoint=False), back]
+    assert standing_base(on_legs) >= low
+    # a surface down to the floor, as high as a chair may be: its base is at the floor
+    assert standing_base(np.linspace(0.0, top, 100)) < LIFTED_BOTTOM
+    assert standing_base(np.array([])) == -math.inf
 
 
 def test_the_depth_a_single_view_hides_is_only_a_lower_bound():

@@ -85,6 +85,13 @@ SURFACE_AREA = 0.25
 #: A cluster whose lowest point is this high above the floor (m) does not stand on it:
 #: something in front may hide its lower part ...
 LIFTED_BOTTOM = 0.2
+#: ... and one that shows less than this share of itself below that height stands on legs
+#: (a chair's legs, column or runners: a few narrow uprights). What reaches the floor as a
+#: surface puts more there: a chair-high cluster (at most 1.3 m, the chair's bound) whose
+#: surfaces run down to the floor has at least 0.2 / 1.3, about 15 %, of its height below
+#: 0.2 m (physical argument). Measured on voxels (``ClusterDescription.base``), so that the
+#: sampling density does not count.
+LEG_SHARE = 0.1
 #: ... if a neighbouring surface (its ``shelter``) reaches at least this close below
 #: the cluster's lowest visible point (m).
 SHELTER_TOLERANCE = 0.05
@@ -133,6 +140,11 @@ class ClusterDescription:
         In a single view, the height above the floor under which the cluster itself
         hides from the sensor what stands behind it (a seat behind its backrest, seen
         from behind and above); ``-inf`` when unknown (a scan fused from many views).
+    base : float
+        Height above the floor under which ``LEG_SHARE`` of the cluster's voxels lie:
+        above its legs when it stands on legs, at the floor when a surface of it reaches
+        the floor; ``-inf`` when unknown (then the lowest point alone says whether the
+        cluster is lifted off the floor).
     open_below : sequence of float, optional
         Per plane, the share of its footprint under which the floor was seen (the part
         feature ``open_below``); NaN where it was not measured, ``None`` when nothing
@@ -149,6 +161,7 @@ class ClusterDescription:
     ceiling: float = math.inf
     hidden_below: float = -math.inf
     open_below: Sequence[float] | None = None
+    base: float = -math.inf
     scene: Mapping[str, Sequence[float] | None] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -421,8 +434,8 @@ def missing_factor(part: Part, desc: ClusterDescription) -> float:
     """The factor of ``part`` left without a plane in this cluster.
 
     ``part.missing``, or ``part.occluded`` when the part can be hidden. The cluster
-    must be lifted off the floor (its bottom above ``LIFTED_BOTTOM``), and then
-    either
+    must be lifted off the floor (its bottom above ``LIFTED_BOTTOM``, or standing on legs:
+    less than ``LEG_SHARE`` of it below that height, ``desc.base``), and then either
 
     - a neighbouring surface stands about as high as its lowest visible point
       (``desc.shelter``), and the part belongs just below what is visible (the
@@ -436,7 +449,7 @@ def missing_factor(part: Part, desc: ClusterDescription) -> float:
     Neither holds when what shows ends in a level board (``SHELTER_AREA``, ``TOP_REACH``).
     """
     bottom = float(desc.bottom)
-    if part.occluded is None or bottom <= LIFTED_BOTTOM:
+    if part.occluded is None or max(bottom, float(desc.base)) <= LIFTED_BOTTOM:
         return part.missing
     top = float(desc.height)
     if any(

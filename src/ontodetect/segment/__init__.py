@@ -39,6 +39,7 @@ from ._measure import (
     runs_on,
     seen_below,
     shelter_heights,
+    standing_base,
     sunk_below,
 )
 from ._parts import PartSeed, horizontal_parts, seed_style, seeded_clusters
@@ -91,6 +92,7 @@ __all__ = [
     "seen_below",
     "segment",
     "shelter_heights",
+    "standing_base",
     "sunk_below",
     "upright_box",
 ]

@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 from ..geometry import box_footprint
 from ..ontology import ClusterDescription
 from ..ontology._features import HIDDEN_DEPTH
-from ..ontology._score import HORIZONTAL_TILT, SHELTER_AREA
+from ..ontology._score import HORIZONTAL_TILT, LEG_SHARE, SHELTER_AREA
 from ..preprocess._structure import FLOOR
 from ._segmentation import Cluster, Segmentation
 
@@ -46,6 +46,7 @@ __all__ = [
     "runs_on",
     "seen_below",
     "shelter_heights",
+    "standing_base",
     "sunk_below",
 ]
 
@@ -77,6 +78,7 @@ def describe_cluster(
         ceiling=ceiling,
         hidden_below=hidden_below,
         open_below=open_below,
+        base=standing_base(cluster.centers[:, 2]),
         scene={
             name: values
             for name, values in (
@@ -88,6 +90,28 @@ def describe_cluster(
             if values is not None
         },
     )
+
+
+def standing_base(heights: NDArray[np.float64]) -> float:
+    """Height above the floor (m) under which ``LEG_SHARE`` of a cluster's voxel heights
+    lie (``ClusterDescription.base``; ``-inf`` for no voxels).
+
+    A chair seen from behind in a single view shows its legs under the backrest that hides
+    its seat: a few narrow uprights, less than a tenth of its voxels, so its base is above
+    them. A cabinet's front, a desk's panel or a sofa's side that reaches the floor puts
+    its base at the floor.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> back = np.linspace(0.45, 0.9, 95)  # a backrest's voxels, and five of its legs'
+    >>> round(standing_base(np.r_[np.linspace(0.0, 0.4, 5), back]), 2)
+    0.47
+    >>> round(standing_base(np.linspace(0.0, 0.9, 100)), 2)  # a panel down to the floor
+    0.09
+    """
+    z = np.asarray(heights, dtype=np.float64)
+    return float(np.quantile(z, LEG_SHARE)) if z.size else -math.inf
 
 
 def describe_clusters(
