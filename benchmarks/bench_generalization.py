@@ -1198,7 +1198,12 @@ def _named_scans(
     scans = simulated_set(source.room_types)
     folder = args.sim_set or args.out
     if args.sim_set is None:
-        folder = next(iter(sorted(args.out.glob(f"sim-{source.name}-*"))), args.out)
+        # --out may hold the single frames' set beside the simulated set: the one that has
+        # the simulated set's scans.
+        folder = next(
+            (f for f in sorted(args.out.glob(f"sim-{source.name}-*")) if _holds(f, scans)),
+            args.out,
+        )
     sim = {s.name: s for s in _sources(folder, scans)}
     unknown = [n for n in names if n not in real and n not in sim]
     if unknown:
@@ -1206,6 +1211,15 @@ def _named_scans(
             "--stability-scans", "names of real scans or of the simulated set's scans", unknown
         )
     return [real[n] if n in real else sim[n] for n in names]
+
+
+def _holds(folder: Path, scans: Sequence[SimScan]) -> bool:
+    """Whether a generated set's manifest lists every one of ``scans``."""
+    try:
+        have = json.loads((folder / "manifest.json").read_text()).get("key", {}).get("scans", [])
+    except (OSError, ValueError):
+        return False
+    return {s.name for s in scans} <= set(have)
 
 
 def _run_stability(

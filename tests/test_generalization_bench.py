@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 import sys
 
@@ -299,6 +300,18 @@ def test_generate_scan_writes_a_scannet_like_scan_with_its_artefacts(tmp_path, m
 
 
 # -- the command ---------------------------------------------------------------------------
+def test_named_stability_scans_come_from_the_simulated_set_not_the_frames(tmp_path):
+    source = B.RoomSource("parametric", ("office", "bedroom"), "")
+    scans, frames = B.simulated_set(source.room_types), B.frames_set(source.room_types)
+    for name, listed in (("sim-parametric-aaa", frames), ("sim-parametric-bbb", scans)):
+        (tmp_path / name).mkdir()
+        key = {"key": {"scans": [s.name for s in listed]}}
+        (tmp_path / name / "manifest.json").write_text(json.dumps(key))
+    args = argparse.Namespace(stability_scans="office-s4-fused", sim_set=None, out=tmp_path)
+    [picked] = B._named_scans(args, [], source)
+    assert picked.path == str(tmp_path / "sim-parametric-bbb" / "office-s4-fused")
+
+
 def test_a_bad_real_path_is_one_line_and_exit_2(tmp_path, capsys):
     missing = tmp_path / "nowhere"
     assert B.main(["--real", str(missing), "--out", str(tmp_path / "out")]) == 2
