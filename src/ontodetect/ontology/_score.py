@@ -85,13 +85,6 @@ SURFACE_AREA = 0.25
 #: A cluster whose lowest point is this high above the floor (m) does not stand on it:
 #: something in front may hide its lower part ...
 LIFTED_BOTTOM = 0.2
-#: ... and one that shows less than this share of itself below that height stands on legs
-#: (a chair's legs, column or runners: a few narrow uprights). What reaches the floor as a
-#: surface puts more there: a chair-high cluster (at most 1.3 m, the chair's bound) whose
-#: surfaces run down to the floor has at least 0.2 / 1.3, about 15 %, of its height below
-#: 0.2 m (physical argument). Measured on voxels (``ClusterDescription.base``), so that the
-#: sampling density does not count.
-LEG_SHARE = 0.1
 #: ... if a neighbouring surface (its ``shelter``) reaches at least this close below
 #: the cluster's lowest visible point (m).
 SHELTER_TOLERANCE = 0.05
@@ -112,6 +105,14 @@ SHELTER_AREA = 0.1
 #: top. A chair pushed under a table shows its back's upper edge; a hutch's shelf over its
 #: back panel or a cabinet's top over its front shows a board, and hides nothing under it.
 TOP_REACH = 0.05
+#: A cluster that shows less than this share of itself below ``LIFTED_BOTTOM`` stands on
+#: legs and is lifted off the floor too (a chair's legs, column or runners: a few narrow
+#: uprights, seen under a backrest that hides the seat). What reaches the floor as a
+#: surface puts more there: a chair-high cluster (at most 1.3 m, the chair's bound) whose
+#: surfaces run down to the floor has at least 0.2 / 1.3, about 15 %, of its height below
+#: 0.2 m (physical argument). Measured on voxels (``ClusterDescription.base``), so that the
+#: sampling density does not count.
+LEG_SHARE = 0.1
 
 
 @dataclass(frozen=True)
@@ -140,15 +141,15 @@ class ClusterDescription:
         In a single view, the height above the floor under which the cluster itself
         hides from the sensor what stands behind it (a seat behind its backrest, seen
         from behind and above); ``-inf`` when unknown (a scan fused from many views).
+    open_below : sequence of float, optional
+        Per plane, the share of its footprint under which the floor was seen (the part
+        feature ``open_below``); NaN where it was not measured, ``None`` when nothing
+        was (then the feature costs nothing).
     base : float
         Height above the floor under which ``LEG_SHARE`` of the cluster's voxels lie:
         above its legs when it stands on legs, at the floor when a surface of it reaches
         the floor; ``-inf`` when unknown (then the lowest point alone says whether the
         cluster is lifted off the floor).
-    open_below : sequence of float, optional
-        Per plane, the share of its footprint under which the floor was seen (the part
-        feature ``open_below``); NaN where it was not measured, ``None`` when nothing
-        was (then the feature costs nothing).
     """
 
     planes: Sequence[Any]
