@@ -332,14 +332,23 @@ def pinned_simulated_set(
     """A simulated set generated earlier (``--sim-set``, or ``option``), used even if the
     generator has changed since, so that two versions of the detector are measured on the
     same rooms."""
-    manifest = folder / "manifest.json"
-    if not manifest.is_file():
+    if not (folder / "manifest.json").is_file():
         raise InvalidParameterError(option, "a simulated set's folder (manifest.json)", folder)
-    have = set(json.loads(manifest.read_text()).get("key", {}).get("scans", []))
+    have = manifest_scans(folder)
     missing = [s.name for s in scans if s.name not in have]
     if missing:
         raise InvalidParameterError(option, "a set with every scan of this run", missing[:3])
     return folder, _sources(folder, scans)
+
+
+def manifest_scans(folder: Path) -> set[str]:
+    """The names of the scans a generated set's manifest lists (none when it has no
+    readable manifest)."""
+    try:
+        key = json.loads((folder / "manifest.json").read_text()).get("key", {})
+    except (OSError, ValueError):
+        return set()
+    return set(key.get("scans", []))
 
 
 def _sources(folder: Path, scans: Sequence[SimScan]) -> list[SceneSource]:
@@ -1073,9 +1082,6 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
         sim = evaluate_dataset(folder, scenes=sim_sources, jobs=jobs, detect_options=opts)
         by_name = {s.name: s for s in scans}
         figures, families, family_class = simulated_figures(sim, scans)
-        by_room, by_variant = figures["by_room_type"], figures["by_variant"]
-        room_counts = Counter(by_name[o.name].room for o in sim.scenes)
-        variant_counts = Counter(by_name[o.name].variant for o in sim.scenes)
         doc["simulated"] = {
             "cache": str(folder),
             "reused_cache": reused,
@@ -1088,26 +1094,15 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
         rooms = doc["simulated"]["rooms"]
         what = "reused from" if reused else "generated in"
         console.print(f"simulated set: {len(scans)} scans of {rooms} rooms, {what} {folder}")
-        console.print(
-            class_table(
-                f"Simulated: {len(sim.scenes)} scans of {rooms} rooms",
-                doc["simulated"]["per_class"],
-            )
-        )
-        console.print(group_table("Simulated: by room type", "room type", by_room, room_counts))
-        console.print(
-            group_table("Simulated: by sensor and artefact", "scan", by_variant, variant_counts)
-        )
-        console.print(family_table(families, family_class))
-        console.print(
-            false_table(
-                "Simulated: what the false detections are", doc["simulated"]["false_detections"]
-            )
-        )
-        console.print(
-            missed_table(
-                "Simulated: where the missed objects were lost", doc["simulated"]["missed"]
-            )
+        print_simulated(
+            "Simulated",
+            f"{len(sim.scenes)} scans of {rooms} rooms",
+            sim,
+            scans,
+            figures,
+            families,
+            family_class,
+            variants=True,
         )
 
         # (c) stability
@@ -1170,23 +1165,42 @@ def _run_frames(
         **figures,
         "seconds": round(time.perf_counter() - t0, 1),
     }
-    by_name = {s.name: s for s in scans}
     what = "reused from" if reused else "generated in"
     console.print(f"single frames: {len(scans)} frames, {what} {folder}")
-    console.print(class_table(f"Single frames: {len(ev.scenes)} frames", figures["per_class"]))
-    room_counts = Counter(by_name[o.name].room for o in ev.scenes)
+    print_simulated(
+        "Single frames", f"{len(ev.scenes)} frames", ev, scans, figures, families, family_class
+    )
+
+
+def print_simulated(
+    title: str,
+    what: str,
+    ev: DatasetEvaluation,
+    scans: Sequence[SimScan],
+    figures: Mapping[str, Any],
+    families: Mapping[str, Any],
+    family_class: Mapping[str, str],
+    *,
+    variants: bool = False,
+) -> None:
+    """The tables of :func:`simulated_figures` (with ``variants``, by sensor and artefact
+    too), each titled ``title``."""
+    by_name = {s.name: s for s in scans}
+    console.print(class_table(f"{title}: {what}", figures["per_class"]))
+    rooms = Counter(by_name[o.name].room for o in ev.scenes)
     console.print(
-        group_table(
-            "Single frames: by room type", "room type", figures["by_room_type"], room_counts
+        group_table(f"{title}: by room type", "room type", figures["by_room_type"], rooms)
+    )
+    if variants:
+        kinds = Counter(by_name[o.name].variant for o in ev.scenes)
+        console.print(
+            group_table(f"{title}: by sensor and artefact", "scan", figures["by_variant"], kinds)
         )
-    )
-    console.print(family_table(families, family_class, title="Single frames"))
+    console.print(family_table(families, family_class, title=title))
     console.print(
-        false_table("Single frames: what the false detections are", figures["false_detections"])
+        false_table(f"{title}: what the false detections are", figures["false_detections"])
     )
-    console.print(
-        missed_table("Single frames: where the missed objects were lost", figures["missed"])
-    )
+    console.print(missed_table(f"{title}: where the missed objects were lost", figures["missed"]))
 
 
 def _named_scans(
@@ -1200,8 +1214,13 @@ def _named_scans(
     if args.sim_set is None:
         # --out may hold the single frames' set beside the simulated set: the one that has
         # the simulated set's scans.
+        wanted = {s.name for s in scans}
         folder = next(
-            (f for f in sorted(args.out.glob(f"sim-{source.name}-*")) if _holds(f, scans)),
+            (
+                f
+                for f in sorted(args.out.glob(f"sim-{source.name}-*"))
+                if wanted <= manifest_scans(f)
+            ),
             args.out,
         )
     sim = {s.name: s for s in _sources(folder, scans)}
@@ -1211,15 +1230,6 @@ def _named_scans(
             "--stability-scans", "names of real scans or of the simulated set's scans", unknown
         )
     return [real[n] if n in real else sim[n] for n in names]
-
-
-def _holds(folder: Path, scans: Sequence[SimScan]) -> bool:
-    """Whether a generated set's manifest lists every one of ``scans``."""
-    try:
-        have = json.loads((folder / "manifest.json").read_text()).get("key", {}).get("scans", [])
-    except (OSError, ValueError):
-        return False
-    return {s.name for s in scans} <= set(have)
 
 
 def _run_stability(
@@ -1278,13 +1288,8 @@ def _finish(out: Path, doc: dict[str, Any], start: float) -> int:
     path = out / "generalization.json"
     path.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
     parts = ", ".join(
-        f"{name} {doc[key]['seconds']:.0f} s"
-        for name, key in (
-            ("real", "real"),
-            ("frames", "frames"),
-            ("simulated", "simulated"),
-            ("stability", "stability"),
-        )
+        f"{key} {doc[key]['seconds']:.0f} s"
+        for key in ("real", "frames", "simulated", "stability")
         if key in doc
     )
     console.print(f"wall time {doc['seconds']:.0f} s ({parts}); written to {path}")
