@@ -191,6 +191,9 @@ DOUBLE_JITTER = 0.005
 #: Share of the points a copy keeps: a fixed-size subsample (ScanNet's 50,000 vertices per
 #: room, as VoteNet prepares them) of a room with twice the surface, or a sparser sensor.
 HALF_SHARE = 0.5
+#: ... and a room with four times the surface (a 50 m² room's 50,000 points spread over a
+#: 200 m² hall or open-plan floor).
+QUARTER_SHARE = 0.25
 
 
 def _noise(cloud: PointCloud, rng: np.random.Generator) -> PointCloud:
@@ -211,8 +214,11 @@ def _doubled(cloud: PointCloud, rng: np.random.Generator) -> PointCloud:
     )
 
 
-def _half(cloud: PointCloud, rng: np.random.Generator) -> PointCloud:
-    return cloud.select(np.flatnonzero(rng.random(len(cloud)) < HALF_SHARE))
+def _kept(share: float) -> Callable[[PointCloud, np.random.Generator], PointCloud]:
+    def keep(cloud: PointCloud, rng: np.random.Generator) -> PointCloud:
+        return cloud.select(np.flatnonzero(rng.random(len(cloud)) < share))
+
+    return keep
 
 
 def robustness_changes() -> dict[str, Callable[[PointCloud, np.random.Generator], PointCloud]]:
@@ -223,18 +229,20 @@ def robustness_changes() -> dict[str, Callable[[PointCloud, np.random.Generator]
     against its own ground truth: Gaussian noise of :data:`NOISE_SIGMA` on every
     coordinate, :data:`FLOOR_LOSS` of the floor's points (class :data:`FLOOR_CLASS`)
     removed, every point twice, the copy jittered by :data:`DOUBLE_JITTER` (new rows), and
-    each point kept with probability :data:`HALF_SHARE`.
+    each point kept with probability :data:`HALF_SHARE`, or :data:`QUARTER_SHARE`.
 
     Examples
     --------
-    >>> list(robustness_changes())
-    ['noise 1 cm', 'floor 80 % unseen', 'points doubled', 'half the points']
+    >>> list(robustness_changes())  # doctest: +NORMALIZE_WHITESPACE
+    ['noise 1 cm', 'floor 80 % unseen', 'points doubled', 'half the points',
+     'a quarter of the points']
     """
     return {
         f"noise {NOISE_SIGMA * 100:g} cm": _noise,
         f"floor {FLOOR_LOSS * 100:.0f} % unseen": _floor_unseen,
         "points doubled": _doubled,
-        "half the points": _half,
+        "half the points": _kept(HALF_SHARE),
+        "a quarter of the points": _kept(QUARTER_SHARE),
     }
 
 

@@ -86,7 +86,13 @@ def test_robustness_changes_keep_the_labels_and_do_what_they_say(rng):
     class_id = np.where(np.arange(n) < n // 2, G.FLOOR_CLASS, 5)  # half floor, half chair
     cloud = point_cloud(xyz, fields={"class_id": class_id, "instance": np.arange(n) % 7})
     fns = G.robustness_changes()
-    assert list(fns) == ["noise 1 cm", "floor 80 % unseen", "points doubled", "half the points"]
+    assert list(fns) == [
+        "noise 1 cm",
+        "floor 80 % unseen",
+        "points doubled",
+        "half the points",
+        "a quarter of the points",
+    ]
     out = {name: fn(cloud, np.random.default_rng(0)) for name, fn in fns.items()}
     noisy = out["noise 1 cm"]
     assert np.std(noisy.xyz - xyz) == pytest.approx(G.NOISE_SIGMA, rel=0.05)
@@ -102,10 +108,11 @@ def test_robustness_changes_keep_the_labels_and_do_what_they_say(rng):
     assert np.std(doubled.xyz[n:] - xyz) == pytest.approx(G.DOUBLE_JITTER, rel=0.05)
     instance = cloud.fields["instance"]
     np.testing.assert_array_equal(doubled.fields["instance"], np.concatenate([instance, instance]))
-    half = out["half the points"]
-    assert len(half) / n == pytest.approx(G.HALF_SHARE, abs=0.03)
-    np.testing.assert_array_equal(half.xyz, xyz[half.index])  # the rows kept, as they were
-    np.testing.assert_array_equal(half.fields["class_id"], class_id[half.index])
+    for name, share in [("half the points", G.HALF_SHARE), ("a quarter of the points", 0.25)]:
+        kept = out[name]
+        assert len(kept) / n == pytest.approx(share, abs=0.03)
+        np.testing.assert_array_equal(kept.xyz, xyz[kept.index])  # the rows kept, as they were
+        np.testing.assert_array_equal(kept.fields["class_id"], class_id[kept.index])
     assert np.all(xyz == cloud.xyz)  # the input is not modified
 
 

@@ -78,6 +78,13 @@ MIN_SURFACE_CELLS = 20
 #: Planar cells this full (percentile of voxel counts) count as completely covered; edge
 #: cells of a surface are partly empty.
 FULL_CELL_PERCENTILE = 90.0
+#: A full cell holds at least this many voxels, or the cells double (up to
+#: ``MAX_SURFACE_CELL``): a cell counts as planar from ``MIN_CELL_POINTS`` voxels, so when a
+#: full cell holds few more, the emptier full cells drop out of the count and the spacing
+#: comes out too small. A Poisson count of mean 16 falls under 5 in one cell of 2,500; of
+#: mean 8, in one of ten; of mean 4 (a 50,000-point scan of a 100 m² room), in most.
+MIN_FULL_CELL = 16.0
+MAX_SURFACE_CELL = 0.8
 #: What :func:`guess_up` assumes of preparation when not told (``prepare.voxel_size`` and
 #: ``prepare.structure_cell``; tests/test_units.py keeps them equal to the configuration's).
 VOXEL_SIZE = 0.02
@@ -384,12 +391,19 @@ def surface_spacing(centers: ArrayLike, voxel_size: float, *, index: str = "kdtr
     c = np.asarray(centers, dtype=np.float64)
     if len(c) < 2:
         return float(voxel_size)
-    cells = cell_planes(c, SURFACE_CELL)
-    counts = cells.counts[cells.planar]
-    if len(counts) >= MIN_SURFACE_CELLS:
+    est = None
+    cell = SURFACE_CELL
+    while cell <= MAX_SURFACE_CELL:
+        cells = cell_planes(c, cell)
+        counts = cells.counts[cells.planar]
+        if len(counts) < MIN_SURFACE_CELLS:
+            break
         full = float(np.percentile(counts, FULL_CELL_PERCENTILE))
-        est = SURFACE_CELL / np.sqrt(full)
-    else:
+        est = cell / np.sqrt(full)
+        if full >= MIN_FULL_CELL:
+            break
+        cell *= 2.0
+    if est is None:
         sample = c[:: max(1, len(c) // SPACING_SAMPLE)]
         est = estimate_spacing(c, sample=len(sample), index=index)
     return float(max(voxel_size, est))
