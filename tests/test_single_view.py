@@ -15,7 +15,12 @@ from ontodetect import InvalidParameterError, point_cloud
 from ontodetect.cloud import DataWarning, pixel_grid, sensor_position
 from ontodetect.config import Config
 from ontodetect.ontology import ClusterDescription, builtin_ontology
-from ontodetect.ontology._score import LIFTED_BOTTOM, cluster_log_factor, missing_factor
+from ontodetect.ontology._score import (
+    HIDDEN_SEAT_TOP,
+    LIFTED_BOTTOM,
+    cluster_log_factor,
+    missing_factor,
+)
 from ontodetect.pipeline import detect, hidden_heights
 from ontodetect.preprocess import smooth_depth
 from ontodetect.segment import standing_base
@@ -181,6 +186,20 @@ def test_a_chair_seen_from_behind_on_its_legs_is_lifted_off_the_floor():
     fused = dataclasses.replace(legs, hidden_below=-math.inf)
     assert missing_factor(seat, fused) == seat.missing
     assert missing_factor(seat, dataclasses.replace(fused, shelter=0.72)) == seat.missing
+
+
+@settings(max_examples=60, deadline=None)
+@given(top=st.floats(0.45, 1.3), bottom=st.floats(0.36, 0.45))
+def test_what_hides_a_seat_in_a_single_view_rises_above_a_table_top(top, bottom):
+    seat = next(p for p in builtin_ontology()["chair"].parts if p.name == "seat")
+    seen = dataclasses.replace(_backrest_only(bottom, hidden_below=top - 0.05), height=top)
+    # a desk's panel seen without its top ends at the top's height or under it; a
+    # chair's back rises higher
+    expected = seat.occluded if top > HIDDEN_SEAT_TOP else seat.missing
+    assert missing_factor(seat, seen) == expected
+    # beside a neighbour's top (a chair pushed under a desk), the back may end lower
+    sheltered = dataclasses.replace(seen, shelter=bottom)
+    assert missing_factor(seat, sheltered) == seat.occluded
 
 
 @settings(max_examples=60, deadline=None)

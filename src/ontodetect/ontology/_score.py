@@ -113,6 +113,14 @@ TOP_REACH = 0.05
 #: 0.2 m (physical argument). Measured on voxels (``ClusterDescription.base``), so that the
 #: sampling density does not count.
 LEG_SHARE = 0.1
+#: In a single view, what hides a seat behind it rises above this (m): the top of a desk
+#: or table (EN 527-1 fixed-height desks 740 +/- 20 mm; dining tables 0.72-0.76 m). An
+#: upright that ends no higher may be the panel under such a top, which a single view sees
+#: edge-on or not at all; a chair's back rises higher (EN 1335-1: 360 mm and more over a
+#: seat of 400 mm and more; dining, stacking and folding chairs' backs top out at
+#: 0.8-1.0 m). Chairs with lower backs (club armchairs, 0.70-0.85 m) seen from straight
+#: behind are the price.
+HIDDEN_SEAT_TOP = 0.76
 
 
 @dataclass(frozen=True)
@@ -445,7 +453,8 @@ def missing_factor(part: Part, desc: ClusterDescription) -> float:
     - in a single view, the cluster itself hides the height the part belongs at
       from the sensor (the centre of its height range lies under
       ``desc.hidden_below`` and not more than ``HIDDEN_MARGIN`` below the cluster's
-      bottom): the seat of a chair seen from behind.
+      bottom) and rises above a table's top (``HIDDEN_SEAT_TOP``): the seat of a chair
+      seen from behind.
 
     Neither holds when what shows ends in a level board (``SHELTER_AREA``, ``TOP_REACH``).
     """
@@ -466,7 +475,11 @@ def missing_factor(part: Part, desc: ClusterDescription) -> float:
         span is None or (span[0] < bottom + SHELTERED_MARGIN and bottom <= span[1])
     ):
         return max(part.missing, part.occluded)
-    if span is not None and bottom - HIDDEN_MARGIN <= span[0] <= float(desc.hidden_below):
+    if (
+        span is not None
+        and bottom - HIDDEN_MARGIN <= span[0] <= float(desc.hidden_below)
+        and top > HIDDEN_SEAT_TOP
+    ):
         return max(part.missing, part.occluded)
     return part.missing
 
