@@ -108,7 +108,10 @@ def test_robustness_changes_keep_the_labels_and_do_what_they_say(rng):
     assert np.std(doubled.xyz[n:] - xyz) == pytest.approx(G.DOUBLE_JITTER, rel=0.05)
     instance = cloud.fields["instance"]
     np.testing.assert_array_equal(doubled.fields["instance"], np.concatenate([instance, instance]))
-    for name, share in [("half the points", G.HALF_SHARE), ("a quarter of the points", 0.25)]:
+    for name, share in [
+        ("half the points", G.HALF_SHARE),
+        ("a quarter of the points", G.QUARTER_SHARE),
+    ]:
         kept = out[name]
         assert len(kept) / n == pytest.approx(share, abs=0.03)
         np.testing.assert_array_equal(kept.xyz, xyz[kept.index])  # the rows kept, as they were

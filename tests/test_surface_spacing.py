@@ -1,5 +1,5 @@
 """The sampling spacing of a scan, from dense sensors to a fixed-size subsample of a large
-room (ScanNet's 50,000 vertices of a 100-200 m² hall: 7-15 cm)."""
+room (ScanNet's 50,000 vertices of a 100-200 m² hall: 7-10 cm) and sparser."""
 
 import numpy as np
 import pytest

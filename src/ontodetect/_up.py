@@ -82,7 +82,9 @@ FULL_CELL_PERCENTILE = 90.0
 #: ``MAX_SURFACE_CELL``): a cell counts as planar from ``MIN_CELL_POINTS`` voxels, so when a
 #: full cell holds few more, the emptier full cells drop out of the count and the spacing
 #: comes out too small. A Poisson count of mean 16 falls under 5 in one cell of 2,500; of
-#: mean 8, in one of ten; of mean 4 (a 50,000-point scan of a 100 m² room), in most.
+#: mean 8, in one of ten; of mean 4 (points 10 cm apart), in most. The largest cell is
+#: about the size of a room's smaller flat surfaces (a table top, a wall between windows),
+#: which must still make whole planar cells.
 MIN_FULL_CELL = 16.0
 MAX_SURFACE_CELL = 0.8
 #: What :func:`guess_up` assumes of preparation when not told (``prepare.voxel_size`` and
