@@ -1289,7 +1289,7 @@ def _finish(out: Path, doc: dict[str, Any], start: float) -> int:
     path.write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
     parts = ", ".join(
         f"{key} {doc[key]['seconds']:.0f} s"
-        for key in ("real", "frames", "simulated", "stability")
+        for key in ("real", "robustness", "frames", "simulated", "stability")
         if key in doc
     )
     console.print(f"wall time {doc['seconds']:.0f} s ({parts}); written to {path}")

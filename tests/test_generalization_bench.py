@@ -348,3 +348,18 @@ def test_figures_are_json_ready():
         "recall": 1.0,
     }
     assert figs["iou@0.5"]["overall"]["tp"] == 1
+
+
+def test_the_summary_line_times_every_part_that_ran(tmp_path, monkeypatch):
+    """The closing line names each measurement that ran with its seconds, the robustness
+    part too, and the document is written whole."""
+    from rich.console import Console
+
+    monkeypatch.setattr(B, "console", Console(record=True, width=200))
+    doc = {part: {"seconds": s} for part, s in (("real", 12.0), ("robustness", 34.0))}
+    assert B._finish(tmp_path, doc, 0.0) == 0
+    line = B.console.export_text()
+    assert "real 12 s, robustness 34 s" in line
+    assert json.loads((tmp_path / "generalization.json").read_text())["robustness"] == {
+        "seconds": 34.0
+    }
