@@ -43,7 +43,8 @@ def test_every_scope_lists_its_features():
 
 def test_sigma_floors_are_those_calibration_used():
     """The absolute floors calibration kept beside it (evaluation._calibrate.ABS_SIGMA_FLOOR
-    on 2026-11-24) are the registry's, and only these features have one."""
+    on 2026-11-24) are the registry's, with those of the features added since (``wall_gap``:
+    the voxel's 2 cm), and only these features have one."""
     floors = {
         "tilt": 1.0,
         "angle": 2.0,
@@ -70,6 +71,7 @@ def test_sigma_floors_are_those_calibration_used():
         "overlap": 0.03,
         "rise": 0.02,
         "planes": 0.5,
+        "wall_gap": 0.02,
     }
     for name, floor in floors.items():
         assert sigma_floor(name) == floor, name

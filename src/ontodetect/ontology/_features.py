@@ -265,6 +265,11 @@ def _at_least(g: Gaussian, value: float, span: float) -> float:
     return float(logsumexp(logs) - math.log(CUT_SAMPLES))
 
 
+def _if_measured(g: Gaussian, desc: Any, value: float) -> float:
+    """The Gaussian's log-factor, or 0 (no factor) for a value not measured (NaN)."""
+    return 0.0 if math.isnan(value) else float(g.log(value))
+
+
 def _censored_height(g: Gaussian, desc: Any, value: float) -> float:
     """The height of a cluster that reaches the altitude cut-off is only known to be at
     least what is seen: the mean of the Gaussian over ``CUT_SPAN`` above it."""
@@ -379,6 +384,12 @@ for _feature in (
             "height of the cluster above its highest horizontal plane (m): a backrest rises "
             "above a seat, nothing rises above a cabinet top", 0.02,
             cluster=_attribute("rise")),
+    # What hangs on a wall (a radiator on its brackets) stands within a few centimetres of
+    # it. Measured from the voxels the preparation took as wall; not where none was found.
+    Feature("wall_gap", "cluster", "cluster",
+            "horizontal distance from the cluster to the nearest wall voxel (m); not "
+            "measured in a scan with no wall", 0.02,
+            cluster=_attribute("wall_gap"), log_factor=_if_measured),
 ):  # fmt: skip
     register_feature(_feature)
 del _feature

@@ -158,6 +158,9 @@ class ClusterDescription:
         above its legs when it stands on legs, at the floor when a surface of it reaches
         the floor; ``-inf`` when unknown (then the lowest point alone says whether the
         cluster is lifted off the floor).
+    wall_gap : float
+        Horizontal distance (m) from the cluster to the nearest voxel taken as wall; NaN
+        when the scan shows no wall (then the feature costs nothing).
     """
 
     planes: Sequence[Any]
@@ -171,6 +174,7 @@ class ClusterDescription:
     hidden_below: float = -math.inf
     open_below: Sequence[float] | None = None
     base: float = -math.inf
+    wall_gap: float = math.nan
     scene: Mapping[str, Sequence[float] | None] = field(default_factory=dict)
 
     def __post_init__(self) -> None:

@@ -41,6 +41,7 @@ from ._measure import (
     shelter_heights,
     standing_base,
     sunk_below,
+    wall_gaps,
 )
 from ._parts import PartSeed, horizontal_parts, seed_style, seeded_clusters
 from ._segmentation import (
@@ -95,4 +96,5 @@ __all__ = [
     "standing_base",
     "sunk_below",
     "upright_box",
+    "wall_gaps",
 ]

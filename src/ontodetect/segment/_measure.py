@@ -22,6 +22,7 @@ from ..ontology import ClusterDescription
 from ..ontology._features import HIDDEN_DEPTH
 from ..ontology._score import HORIZONTAL_TILT, LEG_SHARE, SHELTER_AREA
 from ..preprocess._structure import FLOOR
+from ..preprocess._structure import WALL as WALL_LABEL
 from ._segmentation import Cluster, Segmentation
 
 __all__ = [
@@ -48,6 +49,7 @@ __all__ = [
     "shelter_heights",
     "standing_base",
     "sunk_below",
+    "wall_gaps",
 ]
 
 
@@ -61,12 +63,14 @@ def describe_cluster(
     covered: Sequence[float] | None = None,
     sunk: Sequence[float] | None = None,
     runs_on: Sequence[float] | None = None,
+    wall_gap: float = math.nan,
 ) -> ClusterDescription:
     """What the ontology scoring needs to know about a cluster (``shelter``: see
     :func:`shelter_heights`; ``ceiling``: the top of the search volume;
     ``hidden_below``: see :func:`hidden_heights`; ``open_below``: see
     :func:`open_below`; ``seen_below``, ``covered``, ``sunk`` and ``runs_on``: see
-    :func:`seen_below`, :func:`covered_above`, :func:`sunk_below` and :func:`runs_on`)."""
+    :func:`seen_below`, :func:`covered_above`, :func:`sunk_below` and :func:`runs_on`;
+    ``wall_gap``: see :func:`wall_gaps`)."""
     return ClusterDescription(
         planes=cluster.scored_planes,
         relations=cluster.scored_relations,
@@ -79,6 +83,7 @@ def describe_cluster(
         hidden_below=hidden_below,
         open_below=open_below,
         base=standing_base(cluster.centers[:, 2]),
+        wall_gap=float(wall_gap),
         scene={
             name: values
             for name, values in (
@@ -138,12 +143,44 @@ def describe_clusters(
     below = open_below(seg) if viewpoint is None else [None] * len(seg)
     lower, higher, sunk = _outline_shares(seg, (-1, 1), sunk=True)
     onward = runs_on(seg)
+    walls = wall_gaps(seg)
     return [
-        describe_cluster(c, float(h), ceiling, float(b), o, s, a, k, r)
-        for c, h, b, o, s, a, k, r in zip(
-            seg, shelter_heights(seg), hidden, below, lower, higher, sunk, onward, strict=True
+        describe_cluster(c, float(h), ceiling, float(b), o, s, a, k, r, float(w))
+        for c, h, b, o, s, a, k, r, w in zip(
+            seg,
+            shelter_heights(seg),
+            hidden,
+            below,
+            lower,
+            higher,
+            sunk,
+            onward,
+            walls,
+            strict=True,
         )
     ]
+
+
+def wall_gaps(seg: Segmentation) -> NDArray[np.float64]:
+    """Per cluster, the horizontal distance (m) from its nearest voxel to the nearest voxel
+    the preparation took as wall (``structure_label`` 2); NaN for every cluster when the
+    scan shows no wall.
+
+    What hangs on a wall, a radiator on its brackets (EN 442: 25-50 mm off it), stands
+    within a few centimetres of one.
+    """
+    from scipy.spatial import cKDTree  # heavy: imported when used (start-up)
+
+    out = np.full(len(seg), math.nan)
+    prepared = seg.prepared
+    wall = prepared.structure_label == WALL_LABEL
+    if not len(seg) or not wall.any():
+        return out
+    tree = cKDTree(prepared.centers[wall, :2])
+    for k, c in enumerate(seg):
+        if len(c.centers):
+            out[k] = float(tree.query(np.asarray(c.centers)[:, :2], k=1)[0].min())
+    return out
 
 
 #: Cell of the horizontal grid on which :func:`open_below` compares a plane's footprint
