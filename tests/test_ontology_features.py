@@ -5,6 +5,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from ontodetect.errors import InvalidOntologyError
 from ontodetect.ontology import (
@@ -248,3 +250,29 @@ def test_registering_twice_or_without_a_measure_is_refused():
     two = cluster([P(0.0, 0.5, 1.0, 0.3), P(90.0, 0.8, 1.0, 0.3)], length=1.0)
     assert math.isinf(FEATURES["relation"]["distance"].relation(two, 0, 1))  # no relation
     assert np.isfinite(sigma_floor("tilt"))
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    st.lists(
+        st.one_of(
+            st.floats(-1e6, 50, allow_nan=False),
+            st.just(-math.inf),
+            st.sampled_from([-3.5, 0.0, 2.25]),  # ties of the largest term
+        ),
+        min_size=1,
+        max_size=20,
+    )
+)
+def test_the_censored_measures_sum_is_scipys_to_the_last_bit(values):
+    """``_logsumexp`` is ``scipy.special.logsumexp`` without its dispatch: the same value,
+    bit for bit, including ties of the largest term and terms of -inf."""
+    from scipy.special import logsumexp
+
+    from ontodetect.ontology._features import _logsumexp
+
+    a = np.asarray(values, dtype=np.float64)
+    with np.errstate(all="ignore"):
+        expected = float(logsumexp(a))
+    got = _logsumexp(a)
+    assert got == expected or (math.isnan(got) and math.isnan(expected))

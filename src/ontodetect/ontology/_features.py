@@ -259,10 +259,26 @@ def _rise_above(desc: Any, i: int) -> float:
 def _at_least(g: Gaussian, value: float, span: float) -> float:
     """Log of the mean of ``g`` over ``[value, value + span]``: the factor of a measure
     only known to be at least ``value``, and at most ``span`` more."""
-    from scipy.special import logsumexp  # lazy: scipy.special only for a censored measure
+    logs = np.asarray(g.log(np.linspace(value, value + span, CUT_SAMPLES)), dtype=np.float64)
+    return _logsumexp(logs) - math.log(CUT_SAMPLES)
 
-    logs = np.asarray(g.log(np.linspace(value, value + span, CUT_SAMPLES)))
-    return float(logsumexp(logs) - math.log(CUT_SAMPLES))
+
+def _logsumexp(a: NDArray[np.float64]) -> float:
+    """``log(sum(exp(a)))`` of a 1-D array, as ``scipy.special.logsumexp`` computes it (the
+    largest terms taken out of the sum for precision, the direct sum where that is not
+    finite), to the last bit, without its array-API dispatch (about ten times the cost
+    of the arithmetic on the 13 values a censored measure sums, thousands of times a scan)."""
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        top = float(a.max())
+        is_top = a == top
+        m = float(np.count_nonzero(is_top))
+        s = float(np.exp(np.where(is_top, -np.inf, a) - top).sum())
+        if s != 0.0:
+            s /= m
+        out = float(np.log1p(s) + np.log(m) + top)
+        if not math.isfinite(out):
+            out = float(np.log(np.exp(a).sum()))
+    return out
 
 
 def _if_measured(g: Gaussian, desc: Any, value: float) -> float:
