@@ -38,9 +38,11 @@ __all__ = [
     "grouped_covariance",
     "guess_up",
     "is_single_view",
+    "looks_like_one_view",
     "manhattan_axes",
     "surface_spacing",
     "up_hint",
+    "view_grid",
 ]
 
 #: Named up directions accepted by :func:`estimate_up` and ``prepare(up=...)``.
@@ -460,6 +462,138 @@ def is_single_view(cloud: PointCloud) -> bool:
         return sensor_position(cloud) is not None
     except InvalidParameterError:
         return False
+
+
+#: :func:`looks_like_one_view`: fewest points to judge by; nearest range (m) of the closest
+#: 1 % (a depth camera sees nothing nearer than 0.2-0.5 m; a room scanned around its
+#: origin has points there); widest cone (deg) about the mean direction holding 99.5 % of
+#: the points (a camera's field of view is 60-90 deg across, a room around its origin
+#: 180 and more).
+VIEW_MIN_POINTS = 1000
+VIEW_MIN_RANGE = 0.2
+VIEW_MAX_CONE = 75.0
+#: ... and the median range at most this (m): depth cameras (structured light, stereo,
+#: time of flight) work to 5-10 m; a scan far from the origin fills a narrow cone too.
+VIEW_MAX_RANGE = 10.0
+#: ... the angular cells (gnomonic, about nine points in a full one) in which one surface
+#: per sight line is looked for: their ranges within this share of the nearest ...
+VIEW_SPREAD = 0.15
+#: ... in at least this share of the cells holding two points or more. One view is a depth
+#: image, one surface per sight line (0.94-0.99 on the simulated frames from their sensor,
+#: 0.99 on a Kinect frame); a scan fused from many views holds what lies behind what (0.15-0.2
+#: of the cells on the simulated fused rooms seen from their origin, 0.5-0.85 on frames seen
+#: from elsewhere than their sensor).
+VIEW_SHARE = 0.9
+
+
+def looks_like_one_view(xyz: ArrayLike, eye: ArrayLike = (0.0, 0.0, 0.0)) -> bool:
+    """Whether points look like one view of a depth sensor standing at ``eye``: all of them
+    in a cone from it, none very near it nor most of them far (a depth camera's range),
+    and one surface per sight line (a depth image),
+    which a scan fused from many views is not (what stands in front of a wall, and the wall
+    behind it, on one sight line).
+
+    A depth camera's frame stored without its pixel grid or its viewpoint has its sensor
+    at the origin: SUN RGB-D's frames as VoteNet stores them (upright, z up), or a PLY in
+    the camera's own axes.
+
+    Examples
+    --------
+    >>> gen = np.random.default_rng(0)
+    >>> wall = np.c_[gen.uniform(-1, 1, 4000), gen.uniform(-1, 1, 4000), np.full(4000, 3.0)]
+    >>> box = np.c_[gen.uniform(-0.3, 0.3, (2000, 2)), np.full(2000, 2.0)]
+    >>> looks_like_one_view(np.r_[wall[np.abs(wall[:, :2]).max(1) > 0.45], box])
+    True
+    >>> looks_like_one_view(np.r_[wall, box])  # the wall also behind the box: fused
+    False
+    """
+    p = np.asarray(xyz, dtype=np.float64) - np.asarray(eye, dtype=np.float64)
+    r = np.sqrt(np.einsum("ij,ij->i", p, p))
+    keep = np.isfinite(r) & (r > 0)
+    p, r = p[keep], r[keep]
+    if len(r) < VIEW_MIN_POINTS or float(np.quantile(r, 0.01)) < VIEW_MIN_RANGE:
+        return False
+    if float(np.median(r)) > VIEW_MAX_RANGE:
+        return False
+    d = p / r[:, None]
+    m = d.mean(axis=0)
+    norm = float(np.linalg.norm(m))
+    if norm == 0.0:
+        return False
+    m /= norm
+    cos = d @ m
+    if float(np.degrees(np.arccos(np.clip(np.quantile(cos, 0.005), -1, 1)))) > VIEW_MAX_CONE:
+        return False
+    e1 = np.cross(m, [0.0, 0.0, 1.0] if abs(m[2]) < 0.9 else [1.0, 0.0, 0.0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(m, e1)
+    u, v = (d @ e1) / cos, (d @ e2) / cos
+    cell = 3.0 * float(np.sqrt(np.ptp(u) * np.ptp(v) / len(u)))
+    if not cell > 0.0:
+        return False
+    keys = np.unique(
+        np.c_[np.floor(u / cell), np.floor(v / cell)].astype(np.int64),
+        axis=0,
+        return_inverse=True,
+    )[1].reshape(-1)
+    order = np.argsort(keys, kind="stable")
+    k, rr = keys[order], r[order]
+    starts = np.flatnonzero(np.r_[True, k[1:] != k[:-1]])
+    counts = np.diff(np.r_[starts, len(k)])
+    near = np.minimum.reduceat(rr, starts)
+    far = np.maximum.reduceat(rr, starts)
+    multi = counts >= 2
+    if not multi.any():
+        return False
+    return float(np.mean((far - near)[multi] <= VIEW_SPREAD * near[multi])) >= VIEW_SHARE
+
+
+#: :func:`view_grid`: pixel side as a share of the points' mean angular spacing.
+VIEW_PIXEL = 0.7
+
+
+def _view_coordinates(
+    p: NDArray[np.float64],
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Ranges and gnomonic image coordinates (u, v) of points seen from the origin, about
+    their mean direction."""
+    r = np.sqrt(np.einsum("ij,ij->i", p, p))
+    d = p / np.where(r > 0, r, 1.0)[:, None]
+    m = d.mean(axis=0)
+    m /= max(float(np.linalg.norm(m)), 1e-12)
+    e1 = np.cross(m, [0.0, 0.0, 1.0] if abs(m[2]) < 0.9 else [1.0, 0.0, 0.0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(m, e1)
+    cos = np.maximum(d @ m, 1e-6)
+    return r, (d @ e1) / cos, (d @ e2) / cos
+
+
+def view_grid(
+    xyz: ArrayLike, eye: ArrayLike = (0.0, 0.0, 0.0)
+) -> tuple[NDArray[np.int64], int, int]:
+    """A pixel grid for one view stored as bare points (:func:`looks_like_one_view`): the
+    points' sight lines from ``eye`` on an image plane across their mean direction, in
+    pixels of :data:`VIEW_PIXEL` times their mean angular spacing. Returns each point's
+    pixel (row-major) and the image's width and height, as
+    :func:`ontodetect.cloud.pixel_grid` gives them for a camera's own frame.
+
+    Examples
+    --------
+    >>> gen = np.random.default_rng(0)
+    >>> pts = np.c_[gen.uniform(-1, 1, (900, 2)), np.full(900, 2.0)]
+    >>> pixels, width, height = view_grid(pts)
+    >>> 30 < width < 45 and 30 < height < 45, int(pixels.max()) < width * height
+    (True, True)
+    """
+    p = np.asarray(xyz, dtype=np.float64) - np.asarray(eye, dtype=np.float64)
+    _, u, v = _view_coordinates(p)
+    side = VIEW_PIXEL * float(np.sqrt(np.ptp(u) * np.ptp(v) / max(len(u), 1)))
+    if not side > 0.0:
+        return np.zeros(len(p), dtype=np.int64), 1, 1
+    col = np.floor((u - u.min()) / side).astype(np.int64)
+    row = np.floor((v - v.min()) / side).astype(np.int64)
+    width, height = int(col.max()) + 1, int(row.max()) + 1
+    return row * width + col, width, height
 
 
 def default_up(cloud: PointCloud, choice: str | ArrayLike | None = AUTO_FRAME) -> str | ArrayLike:

@@ -490,6 +490,16 @@ class DetectConfig(_Section):
         "In the vote, a pass with no cluster covering a first-pass cluster (point IoU "
         ">= 0.5) abstains on it instead of voting 'no object'.",
     )
+    # A depth camera's frame saved without its pixel grid or viewpoint (a PLY in the
+    # camera's coordinates, SUN RGB-D's frames as VoteNet stores them) has its sensor at the
+    # origin, and only one surface on each sight line from there.
+    infer_view: bool = _param(
+        True,
+        Boolean(),
+        "A cloud with no viewpoint and no pixel grid that looks like one view from the "
+        "origin (all of it in a cone from there, one surface per sight line) is taken as one, "
+        "its sensor at the origin.",
+    )
     # Every pass holds its own voxels and clusters: a dense scan gets one.
     vote_max_points: int = _param(
         2_000_000,
