@@ -470,6 +470,9 @@ def is_single_view(cloud: PointCloud) -> bool:
 #: the points (a camera's field of view is 60-90 deg across, a room around its origin
 #: 180 and more).
 VIEW_MIN_POINTS = 1000
+#: ... and most points judged (an even stride of the rest): a frame is a few hundred
+#: thousand points, and a large scan must not pay for the test in time or memory.
+VIEW_SAMPLE = 200_000
 VIEW_MIN_RANGE = 0.2
 VIEW_MAX_CONE = 75.0
 #: ... and the median range at most this (m): depth cameras (structured light, stereo,
@@ -507,7 +510,9 @@ def looks_like_one_view(xyz: ArrayLike, eye: ArrayLike = (0.0, 0.0, 0.0)) -> boo
     >>> looks_like_one_view(np.r_[wall, box])  # the wall also behind the box: fused
     False
     """
-    p = np.asarray(xyz, dtype=np.float64) - np.asarray(eye, dtype=np.float64)
+    pts = np.asarray(xyz)
+    pts = pts[:: max(1, -(-len(pts) // VIEW_SAMPLE))]
+    p = np.asarray(pts, dtype=np.float64) - np.asarray(eye, dtype=np.float64)
     r = np.sqrt(np.einsum("ij,ij->i", p, p))
     keep = np.isfinite(r) & (r > 0)
     p, r = p[keep], r[keep]
