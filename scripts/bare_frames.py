@@ -1,0 +1,95 @@
+"""Chairs found in single frames stored as bare points, against the same frames with their
+metadata (docs/benchmarks.md, "A depth frame stored as bare points").
+
+Every frame of a generated set (``ontodetect synth ... --sensor rgbd-frame``, or the
+generalization benchmark's frames set) is detected three ways: as stored, with its sensor's
+position and pixel grid; moved so that its sensor is at the origin and stored with its
+coordinates and colours only, with ``detect.infer_view`` off (a bare frame as it was
+taken before); and the same bare frame with ``detect.infer_view`` on. Each chair detection
+is matched one to one, best score first, to a chair instance of at least 50 points at point
+IoU 0.25.
+
+    python scripts/bare_frames.py FRAMES_DIR [--jobs 2]
+"""
+
+from __future__ import annotations
+
+import argparse
+import warnings
+from multiprocessing import Pool
+from pathlib import Path
+
+import numpy as np
+
+MIN_POINTS = 50
+IOU = 0.25
+WAYS = {
+    "with metadata": [],
+    "bare, as before": ["detect.infer_view=false"],
+    "bare, taken as one view": [],
+}
+
+
+def _chairs_found(result, instance, chairs) -> tuple[int, int]:
+    dets = sorted((d for d in result.detections if d.label == "chair"), key=lambda d: -d.score)
+    used, tp = set(), 0
+    for d in dets:
+        rows = np.asarray(d.point_indices)
+        ids, counts = np.unique(instance[rows], return_counts=True)
+        best = None
+        for i, n in zip(ids.tolist(), counts.tolist(), strict=True):
+            if i in chairs and i not in used:
+                iou = n / (len(rows) + int((instance == i).sum()) - n)
+                if iou >= IOU and (best is None or iou > best[1]):
+                    best = (i, iou)
+        if best is not None:
+            used.add(best[0])
+            tp += 1
+    return tp, len(dets)
+
+
+def one_frame(folder: str) -> tuple[str, int, dict[str, tuple[int, int]]]:
+    warnings.simplefilter("ignore")
+    from ontodetect import point_cloud
+    from ontodetect.config import Config
+    from ontodetect.pipeline import detect
+    from ontodetect.synth import load_synth
+
+    cloud, objects, _ = load_synth(folder)
+    eye = np.asarray(cloud.meta["sensor_position"], dtype=np.float64)
+    instance = np.asarray(cloud.fields["instance"])
+    chairs = {
+        int(o["id"])
+        for o in objects
+        if o["class"] == "chair" and int((instance == int(o["id"])).sum()) >= MIN_POINTS
+    }
+    bare = point_cloud(np.asarray(cloud.xyz) - eye, rgb=cloud.rgb)
+    out = {}
+    for way, sets in WAYS.items():
+        c = cloud if way == "with metadata" else bare
+        result = detect(c, config=Config().with_overrides(sets), seed=0, jobs=1)
+        out[way] = _chairs_found(result, instance, chairs)
+    return Path(folder).name, len(chairs), out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("frames", help="a folder of generated frames (each with scene.json)")
+    ap.add_argument("--jobs", type=int, default=2)
+    args = ap.parse_args()
+    folders = sorted(str(p.parent) for p in Path(args.frames).glob("*/scene.json"))
+    totals = {way: [0, 0] for way in WAYS}
+    gt = 0
+    with Pool(max(1, args.jobs)) as pool:
+        for _, chairs, found in pool.imap_unordered(one_frame, folders):
+            gt += chairs
+            for way, (tp, det) in found.items():
+                totals[way][0] += tp
+                totals[way][1] += det
+    print(f"{len(folders)} frames, {gt} chairs of {MIN_POINTS} points or more")
+    for way, (tp, det) in totals.items():
+        print(f"{way}: {tp}/{det}")
+
+
+if __name__ == "__main__":
+    main()
