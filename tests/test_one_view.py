@@ -75,3 +75,18 @@ def test_detect_takes_a_bare_frame_as_one_and_says_so():
             )
         except DataWarning as w:
             assert "one view" not in str(w)
+
+
+def test_a_bare_frame_in_a_cameras_own_axes_finds_its_floor():
+    """The same view in a camera's axes (x right, y down, z forward): its sight lines run
+    along z, so up is sought near -y, and the floor 1.3 m below the camera is found."""
+    view, _ = _ray_cast()
+    camera = np.c_[view[:, 0], -view[:, 2], view[:, 1]]  # z up, y forward -> y down, z forward
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = detect(
+            point_cloud(camera), config=Config().with_overrides(["detect.votes=1"]), jobs=1
+        )
+    assert not any("no floor found" in str(w.message) for w in caught)
+    up = np.asarray(result.frame["up"], dtype=float)
+    assert up @ [0.0, -1.0, 0.0] > 0.99

@@ -43,6 +43,7 @@ __all__ = [
     "surface_spacing",
     "up_hint",
     "view_grid",
+    "view_up",
 ]
 
 #: Named up directions accepted by :func:`estimate_up` and ``prepare(up=...)``.
@@ -434,6 +435,9 @@ def up_hint(cloud: PointCloud) -> tuple[str, float | None]:
     # camera is pitched or rolled but not turned on its side.
     meta = cloud.meta
     height = meta.get("height")
+    # A view found from its points (``view_up``, :func:`view_up`): its own axes' up.
+    if meta.get("view_up") in AXES:
+        return str(meta["view_up"]), CAMERA_MAX_TILT
     in_world = meta.get("sensor_position") is not None and not meta.get("organized")
     if in_world:
         return "z", CAMERA_MAX_TILT  # one view, placed upright in its map
@@ -551,6 +555,27 @@ def looks_like_one_view(xyz: ArrayLike, eye: ArrayLike = (0.0, 0.0, 0.0)) -> boo
     if not multi.any():
         return False
     return float(np.mean((far - near)[multi] <= VIEW_SPREAD * near[multi])) >= VIEW_SHARE
+
+
+def view_up(xyz: ArrayLike, eye: ArrayLike = (0.0, 0.0, 0.0)) -> str:
+    """The axis a view from ``eye`` stored as bare points has for up: ``z`` when its mean
+    sight line is within :data:`CAMERA_MAX_TILT` of level about it (a view placed upright,
+    as SUN RGB-D's frames in VoteNet's upright axes), else ``-y``, a camera's own axes
+    (y down, z forward: the sight lines run along z).
+
+    Examples
+    --------
+    >>> view_up([[0.3, 3.0, -1.0], [-0.3, 3.0, -0.5]])  # looking along y, a little down
+    'z'
+    >>> view_up([[0.3, 0.5, 3.0], [-0.3, 0.2, 3.0]])  # looking along z: a camera's axes
+    '-y'
+    """
+    p = np.asarray(xyz, dtype=np.float64) - np.asarray(eye, dtype=np.float64)
+    r = np.sqrt(np.einsum("ij,ij->i", p, p))
+    d = p[r > 0] / r[r > 0, None]
+    m = d.mean(axis=0)
+    m /= max(float(np.linalg.norm(m)), 1e-12)
+    return "z" if abs(float(m[2])) <= np.sin(np.radians(CAMERA_MAX_TILT)) else "-y"
 
 
 #: :func:`view_grid`: pixel side as a share of the points' mean angular spacing.

@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 from .._parallel import cpu_count, fork_context, one_blas_thread
 from .._progress import progress, use_reporter
 from .._rules import SEED
-from .._up import looks_like_one_view, view_grid
+from .._up import looks_like_one_view, view_grid, view_up
 from ..cloud import DataWarning, PointCloud, as_position, pixel_grid, sensor_position
 from ..config import COUNT, Config, Nullable, check_param
 from ..errors import InvalidParameterError
@@ -165,7 +165,10 @@ def detect(
         )
         pixels, width, height = view_grid(cloud.xyz)
         cloud = cloud.replace(fields={**cloud.fields, "pixel": pixels}).with_meta(
-            sensor_position=[0.0, 0.0, 0.0], width=width, height=height
+            sensor_position=[0.0, 0.0, 0.0],
+            width=width,
+            height=height,
+            view_up=view_up(cloud.xyz[:: max(1, len(cloud) // 100_000)]),
         )
         eye = sensor_position(cloud)
     elif eye is not None and pixel_grid(cloud) is None:
