@@ -281,11 +281,6 @@ def _logsumexp(a: NDArray[np.float64]) -> float:
     return out
 
 
-def _if_measured(g: Gaussian, desc: Any, value: float) -> float:
-    """The Gaussian's log-factor, or 0 (no factor) for a value not measured (NaN)."""
-    return 0.0 if math.isnan(value) else float(g.log(value))
-
-
 def _censored_height(g: Gaussian, desc: Any, value: float) -> float:
     """The height of a cluster that reaches the altitude cut-off is only known to be at
     least what is seen: the mean of the Gaussian over ``CUT_SPAN`` above it."""
@@ -405,7 +400,7 @@ for _feature in (
     Feature("wall_gap", "cluster", "cluster",
             "horizontal distance from the cluster to the nearest wall voxel (m); not "
             "measured in a scan with no wall", 0.02,
-            cluster=_attribute("wall_gap"), log_factor=_if_measured),
+            cluster=_attribute("wall_gap")),
 ):  # fmt: skip
     register_feature(_feature)
 del _feature

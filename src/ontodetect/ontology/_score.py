@@ -364,10 +364,14 @@ def cluster_log_factor(g: Gaussian, desc: ClusterDescription, feature: str) -> f
 
     The height of a cluster that reaches the altitude cut-off is only known to be at
     least what is seen: the factor is the mean of the Gaussian over ``CUT_SPAN`` above
-    it, so a class that is never that tall pays for it and one that may be does not.
+    it, so a class that is never that tall pays for it and one that may be does not. A
+    value not measured (NaN, such as ``wall_gap`` in a scan with no wall) costs nothing,
+    as for part and relation features.
     """
     f = FEATURES["cluster"][feature]
     value = f.cluster(desc)  # type: ignore[misc]
+    if math.isnan(value):  # not measured: no factor
+        return 0.0
     if f.log_factor is not None:
         return f.log_factor(g, desc, value)
     return float(g.log(value))
@@ -683,7 +687,8 @@ def score_class(
         f = math.exp(log)
         cluster_log += log
         cluster_factor *= f
-        constraints.append(ConstraintValue("cluster", feature, "cluster", value, g, f))
+        measured = None if math.isnan(value) else value
+        constraints.append(ConstraintValue("cluster", feature, "cluster", measured, g, f))
     for groups in factors.values():
         groups["def"] = math.prod(groups.values())
     factors["cluster"] = {"def": cluster_factor}

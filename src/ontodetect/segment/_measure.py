@@ -21,8 +21,7 @@ from ..geometry import box_footprint
 from ..ontology import ClusterDescription
 from ..ontology._features import HIDDEN_DEPTH
 from ..ontology._score import HORIZONTAL_TILT, LEG_SHARE, SHELTER_AREA
-from ..preprocess._structure import FLOOR
-from ..preprocess._structure import WALL as WALL_LABEL
+from ..preprocess._structure import FLOOR, WALL
 from ._segmentation import Cluster, Segmentation
 
 __all__ = [
@@ -173,7 +172,7 @@ def wall_gaps(seg: Segmentation) -> NDArray[np.float64]:
 
     out = np.full(len(seg), math.nan)
     prepared = seg.prepared
-    wall = prepared.structure_label == WALL_LABEL
+    wall = prepared.structure_label == WALL
     if not len(seg) or not wall.any():
         return out
     tree = cKDTree(prepared.centers[wall, :2])
