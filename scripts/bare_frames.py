@@ -5,9 +5,9 @@ Every frame of a generated set (``ontodetect synth ... --sensor rgbd-frame``, or
 generalization benchmark's frames set) is detected three ways: as stored, with its sensor's
 position and pixel grid; moved so that its sensor is at the origin and stored with its
 coordinates and colours only, with ``detect.infer_view`` off (a bare frame as it was
-taken before); and the same bare frame with ``detect.infer_view`` on. Each chair detection
-is matched one to one, best score first, to a chair instance of at least 50 points at point
-IoU 0.25.
+taken before); and the same bare frame with ``detect.infer_view`` on. The chair detections
+are matched to the chair instances of at least 50 points at point IoU 0.25
+(``ontodetect.evaluation.match_instances``: one to one, best score first).
 
     python scripts/bare_frames.py FRAMES_DIR [--jobs 2]
 """
@@ -31,21 +31,16 @@ WAYS = {
 
 
 def _chairs_found(result, instance, chairs) -> tuple[int, int]:
-    dets = sorted((d for d in result.detections if d.label == "chair"), key=lambda d: -d.score)
-    used, tp = set(), 0
-    for d in dets:
-        rows = np.asarray(d.point_indices)
-        ids, counts = np.unique(instance[rows], return_counts=True)
-        best = None
-        for i, n in zip(ids.tolist(), counts.tolist(), strict=True):
-            if i in chairs and i not in used:
-                iou = n / (len(rows) + int((instance == i).sum()) - n)
-                if iou >= IOU and (best is None or iou > best[1]):
-                    best = (i, iou)
-        if best is not None:
-            used.add(best[0])
-            tp += 1
-    return tp, len(dets)
+    from ontodetect.evaluation import Instance, match_instances
+
+    dets = [
+        Instance.make(d.id, "chair", d.point_indices, d.score)
+        for d in result.detections
+        if d.label == "chair"
+    ]
+    gts = [Instance.make(i, "chair", np.flatnonzero(instance == i)) for i in sorted(chairs)]
+    found = match_instances(dets, gts, iou_threshold=IOU).pred_match
+    return int((found >= 0).sum()), len(dets)
 
 
 def one_frame(folder: str) -> tuple[str, int, dict[str, tuple[int, int]]]:

@@ -525,18 +525,13 @@ def looks_like_one_view(xyz: ArrayLike, eye: ArrayLike = (0.0, 0.0, 0.0)) -> boo
     if float(np.median(r)) > VIEW_MAX_RANGE:
         return False
     d = p / r[:, None]
-    m = d.mean(axis=0)
-    norm = float(np.linalg.norm(m))
-    if norm == 0.0:
+    m = _mean_direction(d)
+    if not m.any():
         return False
-    m /= norm
     cos = d @ m
     if float(np.degrees(np.arccos(np.clip(np.quantile(cos, 0.005), -1, 1)))) > VIEW_MAX_CONE:
         return False
-    e1 = np.cross(m, [0.0, 0.0, 1.0] if abs(m[2]) < 0.9 else [1.0, 0.0, 0.0])
-    e1 /= np.linalg.norm(e1)
-    e2 = np.cross(m, e1)
-    u, v = (d @ e1) / cos, (d @ e2) / cos
+    u, v = _image_plane(d, m, cos)
     cell = 3.0 * float(np.sqrt(np.ptp(u) * np.ptp(v) / len(u)))
     if not cell > 0.0:
         return False
@@ -572,9 +567,7 @@ def view_up(xyz: ArrayLike, eye: ArrayLike = (0.0, 0.0, 0.0)) -> str:
     """
     p = np.asarray(xyz, dtype=np.float64) - np.asarray(eye, dtype=np.float64)
     r = np.sqrt(np.einsum("ij,ij->i", p, p))
-    d = p[r > 0] / r[r > 0, None]
-    m = d.mean(axis=0)
-    m /= max(float(np.linalg.norm(m)), 1e-12)
+    m = _mean_direction(p[r > 0] / r[r > 0, None])
     return "z" if abs(float(m[2])) <= np.sin(np.radians(CAMERA_MAX_TILT)) else "-y"
 
 
@@ -582,20 +575,21 @@ def view_up(xyz: ArrayLike, eye: ArrayLike = (0.0, 0.0, 0.0)) -> str:
 VIEW_PIXEL = 0.7
 
 
-def _view_coordinates(
-    p: NDArray[np.float64],
-) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    """Ranges and gnomonic image coordinates (u, v) of points seen from the origin, about
-    their mean direction."""
-    r = np.sqrt(np.einsum("ij,ij->i", p, p))
-    d = p / np.where(r > 0, r, 1.0)[:, None]
+def _mean_direction(d: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The unit mean of unit sight lines ``d`` (n, 3); zero when they cancel out."""
     m = d.mean(axis=0)
-    m /= max(float(np.linalg.norm(m)), 1e-12)
+    return m / max(float(np.linalg.norm(m)), 1e-12)
+
+
+def _image_plane(
+    d: NDArray[np.float64], m: NDArray[np.float64], cos: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Gnomonic image coordinates (u, v) of sight lines ``d`` on the plane across their
+    mean direction ``m`` (``cos``: each one's cosine to it)."""
     e1 = np.cross(m, [0.0, 0.0, 1.0] if abs(m[2]) < 0.9 else [1.0, 0.0, 0.0])
     e1 /= np.linalg.norm(e1)
     e2 = np.cross(m, e1)
-    cos = np.maximum(d @ m, 1e-6)
-    return r, (d @ e1) / cos, (d @ e2) / cos
+    return (d @ e1) / cos, (d @ e2) / cos
 
 
 def view_grid(
@@ -616,7 +610,10 @@ def view_grid(
     (True, True)
     """
     p = np.asarray(xyz, dtype=np.float64) - np.asarray(eye, dtype=np.float64)
-    _, u, v = _view_coordinates(p)
+    r = np.sqrt(np.einsum("ij,ij->i", p, p))
+    d = p / np.where(r > 0, r, 1.0)[:, None]
+    m = _mean_direction(d)
+    u, v = _image_plane(d, m, np.maximum(d @ m, 1e-6))
     side = VIEW_PIXEL * float(np.sqrt(np.ptp(u) * np.ptp(v) / max(len(u), 1)))
     if not side > 0.0:
         return np.zeros(len(p), dtype=np.int64), 1, 1
