@@ -15,7 +15,7 @@ from ontodetect.synth.rooms import object_scene
 
 #: The example ontology of bedrooms (a nightstand by a bed), loaded over the built-in one.
 BEDROOM = Path(__file__).resolve().parents[1] / "docs" / "examples" / "bedroom.yaml"
-#: The example ontology of easy chairs as a class of their own, reported as chairs.
+#: The example ontology of easy chairs, a variant of the chair (reported as chairs).
 EASY_CHAIRS = BEDROOM.with_name("easy-chairs.yaml")
 #: Every class reported, one pass (the vote only steadies what one pass finds).
 CONFIG = Config().with_overrides(["detect.classes=all", "detect.votes=1"])
@@ -79,15 +79,18 @@ def test_easy_chairs_are_chairs(kind, seed):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize(("kind", "seed"), [("chair-wingback", 1), ("chair-armchair", 0)])
-def test_the_example_easy_chair_class_takes_armchairs_the_sofa_took(kind, seed):
-    # Both are read as sofas by the built-in ontology (an easy chair's cushion sits where
-    # a sofa's does); with the easy-chair class their arms one place apart make a chair.
+@pytest.mark.parametrize(("kind", "seed"), [("chair-wingback", 3), ("chair-club", 5)])
+def test_the_example_easy_chair_class_takes_armchairs_the_built_in_misses(kind, seed):
+    # The built-in ontology reads these as a sofa and a table (an easy chair's cushion sits
+    # where a sofa's does, and its back and arms are larger planes than a chair's); with the
+    # example's easy chair, a variant of the chair, they are chairs.
+    cloud, scene, result = _detections_on([kind], seed)
+    assert "chair" not in _covering(cloud, result, _instance(scene, kind))
     cloud, scene, result = _detections_on([kind], seed, load_ontology(EASY_CHAIRS))
     assert _covering(cloud, result, _instance(scene, kind)) == ["chair"]
-    (found,) = result.detections
-    p = found.probabilities  # the two classes of one label together outweigh the sofa
-    assert p["easy_chair"] > 0.1 and p["chair"] + p["easy_chair"] > p["sofa"]
+    (found,) = [d for d in result.detections if d.label == "chair"]
+    p = found.probabilities  # one description of the chair counts, never both
+    assert min(p["chair"], p["easy_chair"]) == 0.0 < max(p["chair"], p["easy_chair"])
 
 
 @pytest.mark.slow

@@ -269,6 +269,10 @@ class ObjectClass:
     #: Bounds of the factor CAD fitting may stretch a model's footprint by to the object's
     #: measured seat or top; ``None``: the footprint keeps its generic size.
     cad_scale: tuple[float, float] | None = None
+    #: The class this one describes another way (an easy chair is a chair): the two share
+    #: a label and a cluster takes the better of the two descriptions, so that a thing
+    #: described twice is not made likelier (``ontology.score_cluster``); ``None``: none.
+    variant_of: str | None = None
 
     def part(self, name: str) -> Part:
         for p in self.parts:
@@ -298,6 +302,61 @@ class Ontology:
 
     def __contains__(self, name: object) -> bool:
         return any(c.name == name for c in self.classes)
+
+    def variant_groups(self) -> dict[str, str]:
+        """For every class, the class whose descriptions it competes among: its
+        ``variant_of``, or itself.
+
+        Raises
+        ------
+        InvalidOntologyError
+            A ``variant_of`` that names no class of the ontology, a variant of a variant,
+            or a variant whose label is not its class's.
+
+        Examples
+        --------
+        >>> onto = parse_ontology('''
+        ... format: ontodetect.ontology/1
+        ... classes:
+        ...   chair: {parts: {seat: {height: [0.35, 0.75]}}}
+        ...   easy_chair: {variant_of: chair, parts: {seat: {height: [0.33, 0.48]}}}
+        ...   sofa: {parts: {seat: {height: [0.3, 0.55]}}}
+        ... ''')
+        >>> groups = onto.variant_groups()
+        >>> groups["easy_chair"], groups["chair"], groups["sofa"], onto["easy_chair"].label
+        ('chair', 'chair', 'sofa', 'chair')
+        """
+        out = {}
+        for c in self.classes:
+            target = c.variant_of
+            if target is None:
+                out[c.name] = c.name
+                continue
+            key = f"classes.{c.name}.variant_of"
+            if target not in self:
+                raise InvalidOntologyError(
+                    self.source,
+                    f"class {c.name!r} is a variant of {target!r}, which is no class of the "
+                    f"ontology ({', '.join(self.names)})",
+                    key=key,
+                )
+            main = self[target]
+            if main.variant_of is not None:
+                raise InvalidOntologyError(
+                    self.source,
+                    f"class {c.name!r} is a variant of {target!r}, itself a variant of "
+                    f"{main.variant_of!r}: name {main.variant_of!r}",
+                    key=key,
+                )
+            if main.label != c.label:
+                raise InvalidOntologyError(
+                    self.source,
+                    f"class {c.name!r} is a variant of {target!r} but its label {c.label!r} "
+                    f"is not {target!r}'s ({main.label!r})",
+                    key=key,
+                )
+            out[c.name] = target
+        return out
 
     def merged(self, other: Ontology) -> Ontology:
         """Classes of ``other`` replace same-named ones here; new ones are appended."""
@@ -855,6 +914,7 @@ def _class(name: str, spec: Any, path: tuple[Any, ...], seeds: Mapping[str, Any]
             "context",
             "near",
             "cad",
+            "variant_of",
         },
         path,
     )
@@ -880,7 +940,12 @@ def _class(name: str, spec: Any, path: tuple[Any, ...], seeds: Mapping[str, Any]
         raise _Problem(path + ("matches",), f"expected a list of class names, got {matches!r}")
     extra = _probability(spec, "extra_plane", path, 1.0)
     surface = _probability(spec, "extra_surface", path)
-    label = spec.get("label", name)
+    variant_of = spec.get("variant_of")
+    if variant_of is not None and (not isinstance(variant_of, str) or not variant_of):
+        raise _Problem(path + ("variant_of",), f"expected a class name, got {variant_of!r}")
+    if variant_of == name:
+        raise _Problem(path + ("variant_of",), "a class cannot be a variant of itself")
+    label = spec.get("label", variant_of or name)
     if not isinstance(label, str) or not label:
         raise _Problem(path + ("label",), f"expected a name, got {label!r}")
     context = spec.get("context", [])
@@ -911,6 +976,7 @@ def _class(name: str, spec: Any, path: tuple[Any, ...], seeds: Mapping[str, Any]
         context=tuple(context),
         near=near,
         cad_scale=cad_scale,
+        variant_of=variant_of,
     )
 
 

@@ -300,6 +300,9 @@ class ClassScore:
     factors: Mapping[str, Mapping[str, float]]  # part -> {"Or", "He", "De", "Pr", "def"}
     constraints: tuple[ConstraintValue, ...]
     probability: float = 0.0  # P_obj|ont after normalisation (set by score_cluster)
+    #: The class whose descriptions this one competes among (``ObjectClass.variant_of``,
+    #: or its own name): only the best of them counts in the posterior.
+    group: str | None = None
 
     @property
     def likelihood(self) -> float:
@@ -696,6 +699,7 @@ def score_class(
     return ClassScore(
         # best_log already holds the extra-plane penalty; the cluster rules come on top.
         name=cls.name,
+        group=cls.variant_of,
         log_likelihood=best_log + cluster_log,
         log_prior=log_prior,
         assignment=assignment,
@@ -733,6 +737,7 @@ def score_cluster(
     ClusterScores
     """
     priors = priors or {}
+    ontology.variant_groups()  # a variant_of that names no class is an error here
     scores = {}
     for cls in ontology.classes:
         prior = float(priors.get(cls.name, 1.0))
@@ -740,9 +745,34 @@ def score_cluster(
     return _posterior(scores, math.log(none_likelihood) + math.log(none_prior))
 
 
+def _better(a: str, b: str, group: str, logs: Mapping[str, float]) -> bool:
+    """Whether class ``a`` describes the cluster better than ``b`` (both of ``group``)."""
+    if logs[a] != logs[b]:
+        return logs[a] > logs[b]
+    if (a == group) != (b == group):
+        return a == group
+    return a < b
+
+
 def _posterior(scores: Mapping[str, ClassScore], none_log: float) -> ClusterScores:
-    """P_obj|ont over the classes and "none" from each class's likelihood and prior."""
+    """P_obj|ont over the classes and "none" from each class's likelihood and prior.
+
+    Classes that describe one thing two ways (``group``: a class's ``variant_of``) count
+    once: the best of them takes the posterior and the others none, so a second
+    description cannot add probability to what both describe a little (the best
+    description, not the sum of the descriptions; ties go to the class named first, then
+    by name).
+    """
     logs = {k: s.log_likelihood + s.log_prior for k, s in scores.items()}
+    best_of: dict[str, str] = {}
+    for k, s in scores.items():
+        group = s.group or k
+        held = best_of.get(group)
+        if held is None or _better(k, held, group, logs):
+            best_of[group] = k
+    for k, s in scores.items():
+        if best_of[s.group or k] != k:
+            logs[k] = -math.inf
     logs[NONE] = none_log
     top = max(logs.values())
     weights = {k: math.exp(v - top) if v > -math.inf else 0.0 for k, v in logs.items()}
