@@ -300,8 +300,8 @@ class ClassScore:
     factors: Mapping[str, Mapping[str, float]]  # part -> {"Or", "He", "De", "Pr", "def"}
     constraints: tuple[ConstraintValue, ...]
     probability: float = 0.0  # P_obj|ont after normalisation (set by score_cluster)
-    #: The class whose descriptions this one competes among (``ObjectClass.variant_of``,
-    #: or its own name): only the best of them counts in the posterior.
+    #: The class whose descriptions this one competes among (``ObjectClass.variant_of``;
+    #: ``None``: its own): only the best of them counts in the posterior.
     group: str | None = None
 
     @property
@@ -758,10 +758,10 @@ def _posterior(scores: Mapping[str, ClassScore], none_log: float) -> ClusterScor
     """P_obj|ont over the classes and "none" from each class's likelihood and prior.
 
     Classes that describe one thing two ways (``group``: a class's ``variant_of``) count
-    once: the best of them takes the posterior and the others none, so a second
-    description cannot add probability to what both describe a little (the best
-    description, not the sum of the descriptions; ties go to the class named first, then
-    by name).
+    once: the best of them (likelihood times prior) takes the posterior and the others
+    none, so a second description cannot add probability to what both describe a little
+    (the best description, not the sum of the descriptions; a tie goes to the class the
+    others are variants of, then to the first name in alphabetical order).
     """
     logs = {k: s.log_likelihood + s.log_prior for k, s in scores.items()}
     best_of: dict[str, str] = {}
