@@ -74,6 +74,23 @@ def test_ontology_key_paths_are_visible(room, tmp_path, capsys):
     )
 
 
+def test_a_variant_of_no_class_is_one_line_naming_its_key(room, tmp_path, capsys):
+    f = tmp_path / "v.yaml"
+    f.write_text(
+        ONTOLOGY_HEAD + "  armchair:\n    variant_of: chiar\n    parts:\n"
+        "      seat: {height: [0.4, 0.8]}\n"
+    )
+    out = tmp_path / "o"
+    one_line(
+        capsys,
+        _detect(room[0], out, "--ontology", str(f)),
+        "v.yaml",
+        "[classes.armchair.variant_of]",
+        "'chiar'",
+    )
+    assert not out.exists()  # refused before anything is written
+
+
 def test_pcd_with_an_empty_height_line(tmp_path, capsys):
     f = tmp_path / "h.pcd"
     f.write_text(

@@ -126,3 +126,12 @@ def test_a_variant_that_cannot_be_one_is_an_error_naming_its_key(text, message):
 def test_a_variant_of_itself_or_of_no_name_is_refused_when_read(value):
     with pytest.raises(InvalidOntologyError, match="variant_of"):
         parse_ontology(HEADER + f"  armchair:\n    variant_of: {value}\n" + SEAT)
+
+
+def test_a_file_with_a_variant_of_no_class_is_refused_when_loaded(tmp_path):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(HEADER + "  armchair:\n    variant_of: chiar\n" + SEAT)
+    with pytest.raises(InvalidOntologyError, match="'chiar', which is no class") as err:
+        load_ontology(bad)
+    assert err.value.key == "classes.armchair.variant_of"
+    assert load_ontology(EASY_CHAIRS)["easy_chair"].variant_of == "chair"

@@ -21,7 +21,9 @@ def builtin_ontology() -> Ontology:
 def load_ontology(*paths: str | PathLike[str], replace: bool = False) -> Ontology:
     """The built-in ontology with the classes of ``paths`` added or replacing same-named ones.
 
-    With ``replace=True`` only the files' classes are used.
+    With ``replace=True`` only the files' classes are used. A ``variant_of`` that names no
+    class of the result is an error here (:meth:`Ontology.variant_groups`), before any scan
+    is read.
     """
     result = None if replace else builtin_ontology()
     for p in paths:
@@ -29,4 +31,5 @@ def load_ontology(*paths: str | PathLike[str], replace: bool = False) -> Ontolog
         result = o if result is None else result.merged(o)
     if result is None:
         return builtin_ontology()
+    result.variant_groups()
     return result
