@@ -10,6 +10,7 @@ import pytest
 from ontodetect import detect
 from ontodetect.config import Config
 from ontodetect.ontology import load_ontology
+from ontodetect.outputs import explain
 from ontodetect.synth.furniture import make_furniture
 from ontodetect.synth.rooms import object_scene
 
@@ -91,6 +92,10 @@ def test_the_example_easy_chair_class_takes_armchairs_the_built_in_misses(kind, 
     (found,) = [d for d in result.detections if d.label == "chair"]
     p = found.probabilities  # one description of the chair counts, never both
     assert min(p["chair"], p["easy_chair"]) == 0.0 < max(p["chair"], p["easy_chair"])
+    # --explain shows the class the labelling chose, even when it is not the most probable.
+    (row,) = [r for r in explain(result, top=1) if r["cluster"] == found.cluster]
+    assert row["class"] in ("chair", "easy_chair")
+    assert row["class"] in [c["class"] for c in row["classes"]]
 
 
 @pytest.mark.slow

@@ -338,7 +338,8 @@ def explain(
     Parameters
     ----------
     top : int
-        Classes shown per cluster, most probable first.
+        Classes shown per cluster, most probable first; the class the labelling chose
+        (``class``) is shown as well when it is not among them.
     classes : sequence of str, optional
         Keep only the clusters labelled with one of these, or whose most probable class
         (other than none) is one of these.
@@ -360,8 +361,14 @@ def explain(
             best = next((name for name, _ in ranked if name != "none"), None)
             if choice.label not in wanted and best not in wanted:
                 continue
+        # The class the labelling chose may not be among the most probable (the energy
+        # weighs its discriminative term too; a variant takes its label's probability).
+        chosen = choice.extra.get("class")
+        shown = ranked[:top]
+        if chosen is not None and all(name != chosen for name, _ in shown):
+            shown = [*shown, (chosen, s.probabilities[chosen])]
         classes = []
-        for name, p in ranked[:top]:
+        for name, p in shown:
             if name == "none":
                 classes.append({"class": "none", "probability": p})
                 continue
@@ -395,6 +402,7 @@ def explain(
                 "planes": len(c.planes),
                 "flags": dict(c.flags),
                 "label": choice.label,
+                "class": chosen,
                 "reason": choice.reason,
                 "costs": dict(choice.costs),
                 "classes": classes,

@@ -491,7 +491,8 @@ def _print_explain(rows) -> None:
                 c["class"], f"{c['probability']:.3g}", "" if cost is None else f"{cost:.3f}"
             )
         console.print(probs)
-        best = next((c for c in row["classes"] if c["class"] != "none"), None)
+        best = next((c for c in row["classes"] if c["class"] == row.get("class")), None)
+        best = best or next((c for c in row["classes"] if c["class"] != "none"), None)
         if best is None:
             continue
         cons = Table(title=f"constraints of {best['class']}", box=None, pad_edge=False)
