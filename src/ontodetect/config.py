@@ -224,6 +224,14 @@ class PrepareConfig(_Section):
         Interval(-180.0, 180.0, "both"),
         "Extra turn (deg) of the levelled frame about the vertical.",
     )
+    # A turn by a multiple of 90° about z is exact (axes swapped and negated): a scan turned
+    # into a pose its own points choose is the same input whichever quarter it came in.
+    quarter_turns: bool = _param(
+        False,
+        Boolean(),
+        "Prepare a scan (no sensor, z up, input frame) turned by the quarter turns its own "
+        "points choose (the longer spread along x, the skewed side to +x).",
+    )
     # Reconstructions bend: real scanned floors rise 20 cm across a room. Heights are
     # measured above a floor height map with tiles of this size; 0 = one flat floor.
     floor_tile: float = _param(

@@ -54,6 +54,7 @@ from ._prepare import (
     scale_from_travel,
     surface_spacing,
 )
+from ._quarter import quarter_matrix, quarter_turns, turn_quarters
 from ._reconstruct import (
     MESH_METHODS,
     SENSOR_HEIGHT,
@@ -99,6 +100,8 @@ __all__ = [
     "local_origin",
     "manhattan_axes",
     "prepare",
+    "quarter_matrix",
+    "quarter_turns",
     "radius_outlier_mask",
     "reconstruct_surface",
     "rotation_between",
@@ -109,5 +112,6 @@ __all__ = [
     "statistical_outlier_mask",
     "surface_scatter",
     "surface_spacing",
+    "turn_quarters",
     "voxelize",
 ]

@@ -25,7 +25,7 @@ from .._up import (
     surface_spacing,
     up_hint,
 )
-from ..cloud import PointCloud, point_cloud
+from ..cloud import PointCloud, point_cloud, sensor_position
 from ..config import Config
 from ..errors import InvalidParameterError
 from ..geometry import LevelFrame, yaw_pose
@@ -41,6 +41,7 @@ from ._gravity import (
     find_floor,
     level_transform,
 )
+from ._quarter import quarter_matrix, quarter_turns, turn_quarters
 from ._structure import StructurePlane, find_structure
 from ._surface import smooth_surface, surface_scatter
 from ._voxel import VoxelGrid, voxelize
@@ -355,6 +356,11 @@ class Ground:
     origin : (3,) float
         The local origin (:func:`local_origin`) subtracted from the input before all of
         the above, which are in that local frame; zeros for most scans.
+    quarter : int
+        Quarter turns about z (:func:`~ontodetect.preprocess.quarter_turns`) the input was
+        turned by before the origin was subtracted (``prepare.quarter_turns``); 0 for most.
+    snapped : bool
+        Whether the (turned) input was rounded to :data:`SNAP` first (``prepare.quarter_turns``).
     """
 
     num_points: int
@@ -370,6 +376,15 @@ class Ground:
     laps: dict[str, float] = field(default_factory=dict)
     origin: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
     floor_scatter: float | None = None
+    quarter: int = 0
+    snapped: bool = False
+
+    def to_local(self, xyz: ArrayLike) -> NDArray[np.float64]:
+        """Input coordinates in the local frame all of the above are in."""
+        local = turn_quarters(xyz, self.quarter)
+        if self.snapped:
+            local = _snap(local)
+        return local - self.origin if self.origin.any() else local
 
 
 @dataclass(frozen=True)
@@ -400,7 +415,8 @@ class GroundPlane:
         """The plane :func:`find_ground` found, in the input frame."""
         u = np.asarray(ground.floor.normal, dtype=np.float64)
         height = float(ground.floor.offset) / ground.scale + float(u @ ground.origin)
-        return cls(u.copy(), height, float(ground.scale), float(ground.floor.area))
+        up = quarter_matrix(ground.quarter).T @ u  # u·(Qx) = (Qᵀu)·x
+        return cls(up, height, float(ground.scale), float(ground.floor.area))
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -432,6 +448,22 @@ def find_ground(
     n = len(xyz)
     if n == 0:
         raise InvalidParameterError("cloud", "a cloud with at least one point", "0 points")
+    up_choice = default_up(cloud, cfg.up if up is None else up)
+    # A scan (no sensor, z up) is prepared in the quarter turn its own points choose, so
+    # that the same scan turned by 90°, 180° or 270° is the same input to the last bit.
+    quarter, snapped = 0, False
+    if (
+        cfg.quarter_turns
+        and plane is None
+        and cfg.frame == "input"
+        and isinstance(up_choice, str)
+        and up_choice == "z"
+        and sensor_position(cloud) is None
+    ):
+        # Read to the nanometre, so that a file turned by a rotation matrix (whose cos 90°
+        # is 6e-17, not 0) is the same input as one turned exactly.
+        quarter, snapped = quarter_turns(xyz), True
+        xyz = _snap(turn_quarters(xyz, quarter))
     # The canonical frame works around the scan's median from the start: the grids laid
     # from it (voxels, cells) are then the same for the scan moved or turned by a quarter.
     canonical = cfg.frame == "canonical"
@@ -483,7 +515,6 @@ def find_ground(
     # -- gravity and ground ------------------------------------------------------------
     spacing = surface_spacing(grid.centers, cfg.voxel_size)
     cell = max(cfg.structure_cell, CELL_PER_SPACING * spacing)
-    up_choice = default_up(cloud, cfg.up if up is None else up)
     confidence = 1.0
     if plane is not None:
         u = as_direction(plane.up)
@@ -535,6 +566,8 @@ def find_ground(
         dict(clock.laps),
         origin,
         floor_scatter,
+        quarter,
+        snapped,
     )
 
 
@@ -603,8 +636,7 @@ def prepare(
             "ground", f"the ground of this cloud ({n} points)", f"{ground.num_points} points"
         )
     origin = ground.origin
-    if origin.any():
-        xyz = xyz - origin  # the local frame the ground was found in
+    xyz = ground.to_local(xyz)  # the local frame the ground was found in
     clock = _Clock()
     clock.laps.update(ground.laps)
     k_s, scale_source, colors = ground.scale, ground.scale_source, cloud.rgb
@@ -682,7 +714,7 @@ def prepare(
         )
         cells = None
     clock.lap("level")
-    normals = None if cloud.normals is None else cloud.normals @ R.T
+    normals = None if cloud.normals is None else turn_quarters(cloud.normals, ground.quarter) @ R.T
     levelled = cloud.replace(xyz=levelled_xyz, normals=normals)
 
     clock.lap("levelled_cloud")
@@ -717,11 +749,14 @@ def prepare(
         # Back to the input frame: levelling now subtracts the local origin first.
         to_level = to_level @ _translation(-origin)
         floor_z += float(floor.normal @ origin)
+    if ground.quarter:
+        # ... and turns the input by its quarter turns before that.
+        to_level = to_level @ _rotation(quarter_matrix(ground.quarter))
     return PreparedScene(
         cloud=levelled,
         to_level=to_level,
         scale=k_s,
-        up=floor.normal.copy(),
+        up=quarter_matrix(ground.quarter).T @ floor.normal,
         floor_z=floor_z,
         floor_found=floor.found,
         inliers=inliers,
@@ -809,6 +844,24 @@ def canonical_pose(
     T = yaw_pose(0.0, 0.0, -yaw)
     if len(centers):
         T[:2, 3] = -np.median(centers[:, :2] @ T[:2, :2].T, axis=0)
+    return T
+
+
+#: The quantum (input units) a scan prepared in its quarter turn is read to: far below any
+#: scanner's resolution, far above the rounding error a rotation leaves in a room's
+#: coordinates (1e-16 to 1e-10 of a unit).
+SNAP = 1e-9
+
+
+def _snap(xyz: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Coordinates rounded to :data:`SNAP` (symmetric: ``-x`` gives minus ``x``'s)."""
+    return np.round(xyz / SNAP) * SNAP
+
+
+def _rotation(matrix: NDArray[np.float64]) -> NDArray[np.float64]:
+    """4x4 transform: the (3, 3) rotation ``matrix``."""
+    T = np.eye(4)
+    T[:3, :3] = matrix
     return T
 
 
