@@ -25,6 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 from ontodetect.cloud import PointCloud, point_cloud, sensor_position
 from ontodetect.evaluation import Instance, match_instances, turn_cloud
 from ontodetect.geometry import point_overlap
+from ontodetect.preprocess import turn_quarters
 
 __all__ = [
     "DOUBLE_JITTER",
@@ -221,6 +222,24 @@ def _kept(share: float) -> Callable[[PointCloud, np.random.Generator], PointClou
     return keep
 
 
+#: Quarter turns of the file's axes about z (exact: axes swapped and negated), a scan
+#: written by a tool with other axes: beside the scans as they are, how much of their
+#: figures is the draw of their files' axes.
+AXES_TURNS = (1, 2, 3)
+
+
+def _axes_turned(quarters: int) -> Callable[[PointCloud, np.random.Generator], PointCloud]:
+    def turn(cloud: PointCloud, rng: np.random.Generator) -> PointCloud:
+        normals = None if cloud.normals is None else turn_quarters(cloud.normals, quarters)
+        out = cloud.replace(xyz=turn_quarters(cloud.xyz, quarters), normals=normals)
+        eye = sensor_position(cloud)
+        if eye is None:
+            return out
+        return out.with_meta(sensor_position=turn_quarters(eye, quarters).tolist())
+
+    return turn
+
+
 def robustness_changes() -> dict[str, Callable[[PointCloud, np.random.Generator], PointCloud]]:
     """Name -> ``fn(cloud, rng)``: a labelled scan changed as sensors and pipelines change
     real scans, beyond what the stability changes do (those keep the scan as it was made).
@@ -228,14 +247,15 @@ def robustness_changes() -> dict[str, Callable[[PointCloud, np.random.Generator]
     Every copy keeps the per-point labels (``instance``, ``class_id``), so it is scored
     against its own ground truth: Gaussian noise of :data:`NOISE_SIGMA` on every
     coordinate, :data:`FLOOR_LOSS` of the floor's points (class :data:`FLOOR_CLASS`)
-    removed, every point twice, the copy jittered by :data:`DOUBLE_JITTER` (new rows), and
-    each point kept with probability :data:`HALF_SHARE`, or :data:`QUARTER_SHARE`.
+    removed, every point twice, the copy jittered by :data:`DOUBLE_JITTER` (new rows),
+    each point kept with probability :data:`HALF_SHARE`, or :data:`QUARTER_SHARE`, and the
+    file's axes turned by :data:`AXES_TURNS` quarter turns about z.
 
     Examples
     --------
     >>> list(robustness_changes())  # doctest: +NORMALIZE_WHITESPACE
     ['noise 1 cm', 'floor 80 % unseen', 'points doubled', 'half the points',
-     'a quarter of the points']
+     'a quarter of the points', 'axes turned 90°', 'axes turned 180°', 'axes turned 270°']
     """
     return {
         f"noise {NOISE_SIGMA * 100:g} cm": _noise,
@@ -243,6 +263,7 @@ def robustness_changes() -> dict[str, Callable[[PointCloud, np.random.Generator]
         "points doubled": _doubled,
         "half the points": _kept(HALF_SHARE),
         "a quarter of the points": _kept(QUARTER_SHARE),
+        **{f"axes turned {90 * q}°": _axes_turned(q) for q in AXES_TURNS},
     }
 
 

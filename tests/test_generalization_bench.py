@@ -92,6 +92,9 @@ def test_robustness_changes_keep_the_labels_and_do_what_they_say(rng):
         "points doubled",
         "half the points",
         "a quarter of the points",
+        "axes turned 90°",
+        "axes turned 180°",
+        "axes turned 270°",
     ]
     out = {name: fn(cloud, np.random.default_rng(0)) for name, fn in fns.items()}
     noisy = out["noise 1 cm"]
@@ -116,6 +119,14 @@ def test_robustness_changes_keep_the_labels_and_do_what_they_say(rng):
         assert len(kept) / n == pytest.approx(share, abs=0.03)
         np.testing.assert_array_equal(kept.xyz, xyz[kept.index])  # the rows kept, as they were
         np.testing.assert_array_equal(kept.fields["class_id"], class_id[kept.index])
+    # The file's axes turned by quarters, exactly: every point and label kept in its row.
+    quarter = out["axes turned 90°"]
+    np.testing.assert_array_equal(quarter.xyz, np.c_[-xyz[:, 1], xyz[:, 0], xyz[:, 2]])
+    np.testing.assert_array_equal(quarter.fields["instance"], cloud.fields["instance"])
+    np.testing.assert_array_equal(out["axes turned 180°"].xyz[:, :2], -xyz[:, :2])
+    np.testing.assert_array_equal(
+        out["axes turned 270°"].xyz, np.c_[xyz[:, 1], -xyz[:, 0], xyz[:, 2]]
+    )
     assert np.all(xyz == cloud.xyz)  # the input is not modified
 
 
