@@ -113,3 +113,26 @@ def test_a_depth_frame_keeps_its_axes():
     scene = prepare(frame, QUARTERS)
     plain = prepare(frame)
     assert np.array_equal(scene.to_level, plain.to_level)
+
+
+def test_the_picture_keeps_the_files_heading():
+    from ontodetect.outputs import _picture_frame
+
+    cloud = synthesize("tiny", seed=2).cloud
+    turned = cloud.replace(xyz=turn_quarters(cloud.xyz, 1))
+    result = detect(turned, config=ONE_PASS, seed=0, jobs=1)
+    k = result.segmentation.prepared.info["quarter_turns"]
+    assert k != 0  # this test needs a scan prepared in another pose than its file's
+    xyz, boxes = _picture_frame(result)
+    # Drawn in the input's horizontal axes (the levelled frame differs by a tilt and a shift).
+    inputs = turned.xyz[result.segmentation.prepared.inliers]
+    drawn = xyz[result.segmentation.prepared.inliers]
+    assert np.allclose(
+        drawn[:, :2] - drawn[:, :2].mean(0), inputs[:, :2] - inputs[:, :2].mean(0), atol=1e-6
+    )
+    for box, d in zip(boxes, result.detections):
+        assert np.allclose(
+            box.center[:2] - drawn[:, :2].mean(0), d.center[:2] - inputs[:, :2].mean(0), atol=1e-6
+        )
+    plain = detect(turned, config=Config().with_overrides(["detect.votes=1"]), seed=0, jobs=1)
+    assert "quarter_turns" not in plain.segmentation.prepared.info

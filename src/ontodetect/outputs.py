@@ -10,6 +10,7 @@ same input and seed.
 from __future__ import annotations
 
 import json
+import math
 import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -32,7 +33,7 @@ from .io import (
 )
 from .io._detections import write_detections
 from .pipeline import Result, detect
-from .preprocess import SurfaceMesh, scene_surface
+from .preprocess import SurfaceMesh, scene_surface, turn_quarters
 from .render import BoxDrawing, class_color, render_scene
 
 __all__ = [
@@ -253,6 +254,21 @@ def write_outputs(
     )
 
 
+def _picture_frame(result: Result) -> tuple[np.ndarray, list[BoxDrawing]]:
+    """The points and the detections' boxes as the picture draws them: in the levelled frame
+    (z up, floor at 0), whatever the input's, turned back by the quarter turns the scan was
+    prepared in (``prepare.quarter_turns``), so that the top view keeps the file's heading."""
+    prepared = result.segmentation.prepared
+    quarters = -int(prepared.info.get("quarter_turns", 0))
+    boxes = []
+    for d in result.detections:
+        box = result.segmentation[d.cluster].box
+        center = turn_quarters(np.asarray(box.center, dtype=np.float64), quarters)
+        yaw = float(box.yaw) + quarters * math.pi / 2
+        boxes.append(BoxDrawing(center, box.size, yaw, d.label, f"{d.score:.2f}"))
+    return turn_quarters(prepared.cloud.xyz, quarters), boxes
+
+
 def _write_files(
     result: Result,
     out: Path,
@@ -282,16 +298,11 @@ def _write_files(
         counts: dict[str, int] = {}
         for d in result.detections:
             counts[d.label] = counts.get(d.label, 0) + 1
-        # Pictures are drawn in the levelled frame (z up, floor at 0), whatever the input's.
-        levelled = result.segmentation.prepared.cloud
-        boxes = []
-        for d in result.detections:
-            box = result.segmentation[d.cluster].box
-            boxes.append(BoxDrawing(box.center, box.size, box.yaw, d.label, f"{d.score:.2f}"))
+        xyz, boxes = _picture_frame(result)
         src = Path(str(cloud.meta.get("source", ""))).name or "scan"
         png = render_scene(
             out / "detections.png",
-            levelled.xyz,
+            xyz,
             rgb=cloud.rgb,
             point_class=point_class,
             boxes=boxes,

@@ -776,6 +776,8 @@ def prepare(
             "floor_scatter": floor_scatter,
             "smoothed": smoothed,
             "timings": clock.laps,
+            # prepare.quarter_turns: the quarter turns the levelled frame is turned by
+            **({"quarter_turns": ground.quarter} if ground.snapped else {}),
         },
     )
 
