@@ -386,6 +386,11 @@ class Ground:
             local = _snap(local)
         return local - self.origin if self.origin.any() else local
 
+    @property
+    def up(self) -> NDArray[np.float64]:
+        """(3,) float: the floor's normal in the input frame (turned back by ``quarter``)."""
+        return np.array(turn_quarters(self.floor.normal, -self.quarter))
+
 
 @dataclass(frozen=True)
 class GroundPlane:
@@ -415,8 +420,7 @@ class GroundPlane:
         """The plane :func:`find_ground` found, in the input frame."""
         u = np.asarray(ground.floor.normal, dtype=np.float64)
         height = float(ground.floor.offset) / ground.scale + float(u @ ground.origin)
-        up = quarter_matrix(ground.quarter).T @ u  # u·(Qx) = (Qᵀu)·x
-        return cls(up, height, float(ground.scale), float(ground.floor.area))
+        return cls(ground.up, height, float(ground.scale), float(ground.floor.area))
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -756,7 +760,7 @@ def prepare(
         cloud=levelled,
         to_level=to_level,
         scale=k_s,
-        up=quarter_matrix(ground.quarter).T @ floor.normal,
+        up=ground.up,
         floor_z=floor_z,
         floor_found=floor.found,
         inliers=inliers,

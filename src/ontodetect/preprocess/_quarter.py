@@ -38,14 +38,6 @@ def _skews(xy: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.flo
     return sd, np.nan_to_num(skew)
 
 
-def _turned(v: NDArray[np.float64], k: int) -> tuple[float, float]:
-    """A horizontal vector's (x, y) after ``k`` quarter turns counter-clockwise."""
-    x, y = float(v[0]), float(v[1])
-    for _ in range(k % 4):
-        x, y = -y, x
-    return x, y
-
-
 def quarter_turns(xyz: ArrayLike) -> int:
     """How many quarter turns (0-3, counter-clockwise about z) put a scan in its pose.
 
@@ -78,7 +70,7 @@ def quarter_turns(xyz: ArrayLike) -> int:
         options = (1, 3)
     else:
         options = (0, 1, 2, 3)
-    turned = {k: _turned(skew, k) for k in options}
+    turned = {k: turn_quarters(np.r_[skew, 0.0], k)[:2] for k in options}
     for axis in (0, 1):
         best = max(options, key=lambda k: turned[k][axis])
         others = [turned[k][axis] for k in options if k != best]
@@ -93,10 +85,8 @@ def quarter_matrix(k: int) -> NDArray[np.float64]:
     >>> quarter_matrix(1).astype(int).tolist()
     [[0, -1, 0], [1, 0, 0], [0, 0, 1]]
     """
-    m = np.eye(3)
-    for _ in range(k % 4):
-        m = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]) @ m
-    return m
+    # Its columns are the axes turned; + 0.0 makes the zeros of negated ones positive.
+    return turn_quarters(np.eye(3), k).T + 0.0
 
 
 def turn_quarters(xyz: ArrayLike, k: int) -> NDArray[np.float64]:
