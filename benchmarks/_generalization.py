@@ -267,6 +267,57 @@ def robustness_changes() -> dict[str, Callable[[PointCloud, np.random.Generator]
     }
 
 
+#: The robustness row of the real scans as they are and their files' axes turned, pooled.
+POOLED = "as they are and axes turned, pooled"
+
+
+def pooled_orientations(
+    real: Mapping[str, Mapping[str, Any]] | None, changes: Mapping[str, Mapping[str, Any]]
+) -> dict[str, dict[str, float]] | None:
+    """TP/det/GT per class summed over the real scans as they are and their files' axes
+    turned by :data:`AXES_TURNS`: the real figure with the draw of the files' axes pooled
+    (``None`` unless all four were measured).
+
+    The same 13 scans read in four orientations are 52 readings of one room set: a change
+    judged on the scans as they are alone is judged on one draw of four, which moves the
+    chairs found by two with nothing but the axes.
+
+    Examples
+    --------
+    >>> one = {"chair": {"tp": 2, "det": 3, "gt": 4}}
+    >>> turned = {f"axes turned {90 * q}°": {"per_class": one} for q in AXES_TURNS}
+    >>> pooled_orientations(one, turned)["chair"]
+    {'tp': 8, 'det': 12, 'gt': 16, 'precision': 0.6667, 'recall': 0.5}
+    >>> pooled_orientations(one, turned)["overall"]["tp"]  # the classes summed
+    8
+    >>> pooled_orientations(one, {}) is None
+    True
+    """
+    names = [f"axes turned {90 * q}°" for q in AXES_TURNS]
+    if real is None or any(n not in changes for n in names):
+        return None
+    figs = [real] + [changes[n].get("per_class", {}) for n in names]
+    classes = sorted({c for f in figs for c in f} - {"overall"})
+    out: dict[str, dict[str, float]] = {}
+    for c in [*classes, "overall"]:
+        tp, det, gt = (
+            sum(
+                int(f.get(k, {}).get(key, 0))
+                for f in figs
+                for k in (classes if c == "overall" else [c])
+            )
+            for key in ("tp", "det", "gt")
+        )
+        out[c] = {
+            "tp": tp,
+            "det": det,
+            "gt": gt,
+            "precision": round(tp / det, 4) if det else 0.0,
+            "recall": round(tp / gt, 4) if gt else 0.0,
+        }
+    return out
+
+
 # -- what the detections hit ---------------------------------------------------------------
 def rows_to_values(index: ArrayLike, values: ArrayLike, fill: int = 0) -> NDArray[np.int64]:
     """A per-row array: ``values`` placed at the rows ``index`` names, ``fill`` elsewhere.

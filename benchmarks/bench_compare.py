@@ -34,7 +34,7 @@ from typing import Any
 from rich.console import Console
 from rich.table import Table
 
-from ._generalization import MISSED_CAUSES
+from ._generalization import MISSED_CAUSES, POOLED, pooled_orientations
 from .bench_generalization import THRESHOLDS
 
 console = Console(highlight=False)
@@ -175,15 +175,28 @@ def stability_rows(
 
 
 def robustness_rows(
-    before: Mapping[str, Any], after: Mapping[str, Any]
+    before: Mapping[str, Any],
+    after: Mapping[str, Any],
+    real_before: Mapping[str, Any] | None = None,
+    real_after: Mapping[str, Any] | None = None,
 ) -> list[tuple[str, str, str, str, str]]:
     """Per change of the real scans and class: TP/det/GT and P / R, before and after (the
-    robustness part is measured at point IoU 0.25 only)."""
+    robustness part is measured at point IoU 0.25 only); with the real part's figures at
+    point IoU 0.25, the scans as they are and their axes turned pooled last
+    (:func:`pooled_orientations`)."""
     rows = []
     ch_b, ch_a = before.get("changes", {}), after.get("changes", {})
-    for name in _ordered(list(ch_b) + list(ch_a)):
-        fb = ch_b.get(name, {}).get("per_class", {})
-        fa = ch_a.get(name, {}).get("per_class", {})
+    per_name = {
+        name: (ch_b.get(name, {}).get("per_class", {}), ch_a.get(name, {}).get("per_class", {}))
+        for name in _ordered(list(ch_b) + list(ch_a))
+    }
+    pooled = (
+        pooled_orientations(real_before, ch_b) if real_before is not None else None,
+        pooled_orientations(real_after, ch_a) if real_after is not None else None,
+    )
+    if any(p is not None for p in pooled):
+        per_name[POOLED] = (pooled[0] or {}, pooled[1] or {})
+    for name, (fb, fa) in per_name.items():
         for c in _ordered(list(fb) + list(fa)):
             b, a = fb.get(c), fa.get(c)
             rows.append((f"{name}, {c}", _cell(b), _cell(a), _pr(b), _pr(a)))
@@ -211,6 +224,11 @@ def _same(row: tuple[Any, ...]) -> bool:
     """A row is unchanged when its "before" and "after" cells agree pairwise."""
     values = row[1:]
     return all(values[i] == values[i + 1] for i in range(0, len(values) - 1, 2))
+
+
+def _real(doc: Mapping[str, Any]) -> Mapping[str, Any] | None:
+    """The real part's per-class figures at point IoU 0.25 (the robustness part's IoU)."""
+    return (doc.get("real") or {}).get("per_class", {}).get("iou@0.25")
 
 
 def compare(
@@ -291,7 +309,7 @@ def compare(
             "Robustness",
             "the real scans changed, TP/det/GT at point IoU 0.25",
             ["change, class", "before", "after", "P / R before", "P / R after"],
-            robustness_rows,
+            lambda b, a: robustness_rows(b, a, _real(before), _real(after)),
         ),
         (
             "stability",

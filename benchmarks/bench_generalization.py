@@ -55,11 +55,13 @@ from rich.table import Table
 
 from benchmarks._generalization import (
     MISSED_CAUSES,
+    POOLED,
     STABILITY_IOU,
     STABILITY_TURNS,
     false_detection_causes,
     instance_names,
     missed_causes,
+    pooled_orientations,
     reappearance,
     recall_by_group,
     robustness_changes,
@@ -841,8 +843,12 @@ def robustness_table(res: Mapping[str, Any], real: Mapping[str, Any] | None) -> 
         t.add_column(c, justify="right")
         t.add_column("P / R", justify="right")
     t.add_column("floor scatter", justify="right")
-    rows = [("as they are", (real or {}).get("iou@0.25"), None)]
+    as_they_are = (real or {}).get("iou@0.25")
+    rows = [("as they are", as_they_are, None)]
     rows += [(n, v["per_class"], v["floor_scatter"]) for n, v in res["changes"].items()]
+    pooled = pooled_orientations(as_they_are, res["changes"])
+    if pooled is not None:
+        rows.append((POOLED, pooled, None))
     for name, figs, scatter in rows:
         cells = [name]
         for c in CLASSES:

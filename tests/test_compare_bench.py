@@ -158,6 +158,37 @@ def test_robustness_rows_give_each_change_and_class_before_and_after():
     assert "Robustness: not in the second run" in items
 
 
+def test_the_real_scans_in_their_four_orientations_are_pooled_last():
+    """The scans as they are and their files' axes turned by 90, 180 and 270 degrees, summed:
+    the real figure without the draw of the files' axes."""
+    before = run_doc()
+    turned = {
+        f"axes turned {a}°": {"per_class": {"chair": fig(t, t + 1, 12)}}
+        for a, t in ((90, 7), (180, 8), (270, 6))
+    }
+    before["robustness"]["changes"].update(turned)
+    after = json.loads(json.dumps(before))
+    after["robustness"]["changes"]["axes turned 90°"]["per_class"]["chair"] = fig(9, 9, 12)
+    rows = C.robustness_rows(
+        before["robustness"], after["robustness"], C._real(before), C._real(after)
+    )
+    pooled = {r[0]: r[1:3] for r in rows if r[0].startswith(C.POOLED)}
+    real = before["real"]["per_class"]["iou@0.25"]["chair"]
+    tp, det = real["tp"] + 7 + 8 + 6, real["det"] + 8 + 9 + 7
+    assert pooled[f"{C.POOLED}, chair"] == (
+        f"{tp}/{det}/{real['gt'] + 36}",
+        f"{tp + 2}/{det + 1}/{real['gt'] + 36}",
+    )
+    # Without all three turns there is nothing to pool.
+    assert not [
+        r
+        for r in C.robustness_rows(
+            run_doc()["robustness"], run_doc()["robustness"], C._real(before), C._real(after)
+        )
+        if r[0].startswith(C.POOLED)
+    ]
+
+
 def test_compare_of_a_run_with_itself_changes_nothing():
     doc = run_doc()
     items = C.compare(doc, doc, changed=True)
