@@ -28,8 +28,8 @@ def test_the_builtin_roles_are_those_the_code_had():
     )
     assert a.outer_margin == 0.1 and top.low is None
     assert (seat.low.up_to, seat.low.level, seat.low.margin) == (0.6, 0.05, 0.2)
-    # labeling: chair, sofa, stool and bench profit from a table nearby.
-    seating = {"chair", "sofa", "stool", "bench"}
+    # labeling: chair (and the easy chair), sofa, stool and bench profit from a table nearby.
+    seating = {"chair", "easy_chair", "sofa", "stool", "bench"}
     assert o.context_pairs() == {(s, "table") for s in seating} | {("table", s) for s in seating}
     # cad/_fit.py: the seat and the backrest by name, SEAT_RANGE, TOP_RANGE and the scales.
     assert o.cad_parts("chair") == o.cad_parts("sofa") == {"seat": "seat", "backrest": "back"}

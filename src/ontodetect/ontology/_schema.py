@@ -386,7 +386,7 @@ class Ontology:
         >>> onto["toilet"].detect, builtin_ontology()["toilet"].detect
         (True, False)
         >>> [c.name for c in builtin_ontology().reporting("chair,sink").classes if c.detect]
-        ['chair', 'sink', 'basin']
+        ['chair', 'easy_chair', 'sink', 'basin']
         """
         if isinstance(classes, str):
             if classes == "reported":
