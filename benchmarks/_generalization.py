@@ -308,14 +308,24 @@ def pooled_orientations(
             )
             for key in ("tp", "det", "gt")
         )
-        out[c] = {
-            "tp": tp,
-            "det": det,
-            "gt": gt,
-            "precision": round(tp / det, 4) if det else 0.0,
-            "recall": round(tp / gt, 4) if gt else 0.0,
-        }
+        out[c] = class_figures(tp, det, gt)
     return out
+
+
+def class_figures(tp: int, det: int, gt: int) -> dict[str, float]:
+    """One class's figures as generalization.json holds them: TP, detections, ground truth,
+    precision and recall (0 where there is nothing to divide by), to four places.
+
+    >>> class_figures(2, 3, 4)
+    {'tp': 2, 'det': 3, 'gt': 4, 'precision': 0.6667, 'recall': 0.5}
+    """
+    return {
+        "tp": tp,
+        "det": det,
+        "gt": gt,
+        "precision": round(tp / det, 4) if det else 0.0,
+        "recall": round(tp / gt, 4) if gt else 0.0,
+    }
 
 
 # -- what the detections hit ---------------------------------------------------------------

@@ -58,6 +58,7 @@ from benchmarks._generalization import (
     POOLED,
     STABILITY_IOU,
     STABILITY_TURNS,
+    class_figures,
     false_detection_causes,
     instance_names,
     missed_causes,
@@ -816,14 +817,7 @@ def robustness(scans: Sequence[SceneSource], jobs: int, opts: Mapping[str, Any])
         mine = [r for r in runs if r["change"] == n]
         per_class = {}
         for c in CLASSES:
-            tp, det, gt = (sum(r["counts"][c][k] for r in mine) for k in range(3))
-            per_class[c] = {
-                "tp": tp,
-                "det": det,
-                "gt": gt,
-                "precision": round(tp / det, 4) if det else 0.0,
-                "recall": round(tp / gt, 4) if gt else 0.0,
-            }
+            per_class[c] = class_figures(*(sum(r["counts"][c][k] for r in mine) for k in range(3)))
         scatter = [r["floor_scatter"] for r in mine if r["floor_scatter"] is not None]
         out["changes"][n] = {
             "per_class": per_class,
