@@ -190,10 +190,7 @@ def robustness_rows(
         name: (ch_b.get(name, {}).get("per_class", {}), ch_a.get(name, {}).get("per_class", {}))
         for name in _ordered(list(ch_b) + list(ch_a))
     }
-    pooled = (
-        pooled_orientations(real_before, ch_b) if real_before is not None else None,
-        pooled_orientations(real_after, ch_a) if real_after is not None else None,
-    )
+    pooled = (pooled_orientations(real_before, ch_b), pooled_orientations(real_after, ch_a))
     if any(p is not None for p in pooled):
         per_name[POOLED] = (pooled[0] or {}, pooled[1] or {})
     for name, (fb, fa) in per_name.items():
