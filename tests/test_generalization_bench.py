@@ -374,3 +374,42 @@ def test_the_summary_line_times_every_part_that_ran(tmp_path, monkeypatch):
     assert json.loads((tmp_path / "generalization.json").read_text())["robustness"] == {
         "seconds": 34.0
     }
+
+
+def _stability_run(found, total, worst_share):
+    """A hand-made :func:`stability` result of one scan and one change."""
+    share = found / total
+    return {
+        "scans": ["room"],
+        "transforms": ["turn 90°"],
+        "iou": 0.5,
+        "reference_detections": {"room": total},
+        "reappeared": {"turn 90°": {"room": [found, total]}},
+        "detections": {"turn 90°": {"room": found}},
+        "per_transform": {"turn 90°": {"mean": share, "worst": worst_share}},
+        "mean": share,
+        "worst": worst_share,
+        "detect_seconds": 2.0,
+    }
+
+
+def test_stability_over_several_seeds_pools_their_figures():
+    runs = {0: _stability_run(9, 10, 0.9), 1: _stability_run(6, 8, 0.75)}
+    pooled = B.pooled_seeds(runs)
+    assert pooled["seeds"] == [0, 1]
+    assert pooled["reappeared"]["turn 90°"]["room"] == [15, 18]
+    assert pooled["reference_detections"] == {"room": 18}
+    assert pooled["mean"] == pytest.approx((0.9 + 0.75) / 2)
+    assert pooled["worst"] == 0.75 == pooled["per_transform"]["turn 90°"]["worst"]
+    assert pooled["by_seed"]["1"]["mean"] == 0.75 and pooled["detect_seconds"] == 4.0
+    # the table prints it as one run
+    assert B.stability_table("t", pooled).row_count == 2
+
+
+@pytest.mark.parametrize("seeds", ["a", ",", "0,x"])
+def test_bad_stability_seeds_are_one_line_and_exit_2(tmp_path, capsys, seeds):
+    with pytest.raises(SystemExit) as stop:
+        B.main(["--real", str(tmp_path), "--stability-seeds", seeds])
+    assert stop.value.code == 2
+    assert "--stability-seeds" in capsys.readouterr().err
+    assert not (tmp_path / "bench-output").exists()
