@@ -606,7 +606,7 @@ def pooled_seeds(runs: Mapping[int, Mapping[str, Any]]) -> dict[str, Any]:
     """:func:`stability` run with several detection seeds, as one result: found / reference
     detections summed over the seeds per change and scan, each change's and the overall mean
     the mean of the seeds' means and the worst the lowest of their worsts; each seed's own
-    result under ``by_seed``. The seed alone moves the six-scan mean by about 0.02
+    result under ``by_seed``. The seed alone moves the six-scan mean by 0.02-0.04
     (docs/benchmarks.md, "Easy chairs built in"): a change is read on more than one draw.
     """
     results = list(runs.values())
@@ -997,7 +997,7 @@ def main(argv: list[str] | None = None) -> int:
         "--stability-seeds",
         default=None,
         help="stability: detection seeds (comma-separated, e.g. 0,1), each run whole and the "
-        "figures pooled (the seed alone moves the mean by about 0.02); default: --seed",
+        "figures pooled (the seed alone moves the mean by 0.02-0.04); default: --seed",
     )
     ap.add_argument(
         "--turns",
