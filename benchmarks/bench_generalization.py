@@ -44,7 +44,7 @@ import time
 import warnings
 import zlib
 from collections import Counter
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -580,14 +580,11 @@ def stability(
     shares = {
         n: {s: (f / t if t else None) for s, (f, t) in per.items()} for n, per in table.items()
     }
-    summary = {}
-    for n, per in shares.items():
-        vals = [v for v in per.values() if v is not None]
-        summary[n] = {
-            "mean": round(float(np.mean(vals)), 4) if vals else None,
-            "worst": round(float(np.min(vals)), 4) if vals else None,
-        }
-    every = [v for per in shares.values() for v in per.values() if v is not None]
+    summary = {
+        n: {"mean": _known(np.mean, per.values()), "worst": _known(np.min, per.values())}
+        for n, per in shares.items()
+    }
+    every = [v for per in shares.values() for v in per.values()]
     return {
         "scans": [s.name for s in scans],
         "transforms": names,
@@ -596,10 +593,17 @@ def stability(
         "reappeared": table,
         "detections": counts,
         "per_transform": summary,
-        "mean": round(float(np.mean(every)), 4) if every else None,
-        "worst": round(float(np.min(every)), 4) if every else None,
+        "mean": _known(np.mean, every),
+        "worst": _known(np.min, every),
         "detect_seconds": round(sum(r["seconds"] for r in runs), 1),
     }
+
+
+def _known(stat: Callable, values: Iterable[float | None]) -> float | None:
+    """``stat`` (``np.mean``, ``np.min``) of the values that are not None, to four places;
+    None when there are none."""
+    known = [v for v in values if v is not None]
+    return round(float(stat(known)), 4) if known else None
 
 
 def pooled_seeds(runs: Mapping[int, Mapping[str, Any]]) -> dict[str, Any]:
@@ -612,15 +616,6 @@ def pooled_seeds(runs: Mapping[int, Mapping[str, Any]]) -> dict[str, Any]:
     results = list(runs.values())
     first = results[0]
     names, scans = first["transforms"], first["scans"]
-
-    def mean(values: list[float | None]) -> float | None:
-        known = [v for v in values if v is not None]
-        return round(float(np.mean(known)), 4) if known else None
-
-    def low(values: list[float | None]) -> float | None:
-        known = [v for v in values if v is not None]
-        return round(float(np.min(known)), 4) if known else None
-
     return {
         "scans": scans,
         "transforms": names,
@@ -638,13 +633,13 @@ def pooled_seeds(runs: Mapping[int, Mapping[str, Any]]) -> dict[str, Any]:
         },
         "per_transform": {
             n: {
-                "mean": mean([r["per_transform"][n]["mean"] for r in results]),
-                "worst": low([r["per_transform"][n]["worst"] for r in results]),
+                "mean": _known(np.mean, [r["per_transform"][n]["mean"] for r in results]),
+                "worst": _known(np.min, [r["per_transform"][n]["worst"] for r in results]),
             }
             for n in names
         },
-        "mean": mean([r["mean"] for r in results]),
-        "worst": low([r["worst"] for r in results]),
+        "mean": _known(np.mean, [r["mean"] for r in results]),
+        "worst": _known(np.min, [r["worst"] for r in results]),
         "detect_seconds": round(sum(r["detect_seconds"] for r in results), 1),
         "by_seed": {str(k): dict(r) for k, r in runs.items()},
     }
