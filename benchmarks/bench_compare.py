@@ -15,7 +15,9 @@ by side, so that the note of a change can give all three:
 - robustness: TP / detections / ground truth and precision and recall per class on the real
   scans changed as sensors change them (noise, a floor unseen, points doubled, half the
   points);
-- stability: mean and worst, and per change of the scan.
+- stability: mean and worst, and per change of the scan;
+- the objects that changed, one by one (for runs that list their ``mistakes``): which missed
+  object of which scan is found now or lost now, and which false detections came or went.
 
 A part one of the runs did not measure (``--only``) is left out, and said so. Rows that did
 not change are printed dim; ``--changed`` prints only the rows that did. ``--markdown``
@@ -157,6 +159,61 @@ def missed_rows(before: Mapping[str, Any], after: Mapping[str, Any]) -> list[tup
     return rows
 
 
+def object_rows(
+    before: Mapping[str, Any] | None, after: Mapping[str, Any] | None
+) -> list[tuple[str, str, str]] | None:
+    """The objects whose outcome differs between two runs, from their ``mistakes`` at one
+    threshold (None when a run has none: written before the benchmark kept them): per
+    missed object of either run, ``scan: kind #id`` and what each run made of it (found, or
+    where it was lost and as what); per false detection of either run, ``scan: kind #instance
+    as label`` and how many there were in each. Sorted by scan.
+
+    >>> b = {"missed": [{"scene": "s1", "id": 4, "label": "chair", "kind": "chair-dining",
+    ...                  "cause": "scored", "as": "table"}],
+    ...      "false": [{"scene": "s2", "label": "chair", "is": "sink", "kind": "sink",
+    ...                 "instance": 9}]}
+    >>> for row in object_rows(b, {"missed": [], "false": []}):
+    ...     print(row)
+    ('s1: chair-dining #4', 'missed (scored, as table)', 'found')
+    ('s2: sink #9 as chair', 'false', '-')
+    """
+    if before is None or after is None:
+        return None
+
+    def missed(items: Iterable[Mapping[str, Any]]) -> dict[tuple[str, str], str]:
+        out = {}
+        for m in items:
+            what = m.get("cause", "?") + (f", as {m['as']}" if m.get("as") else "")
+            key = (m["scene"], f"{m.get('kind') or m.get('label')} #{m.get('id')}")
+            out[key] = f"missed ({what})"
+        return out
+
+    def false(items: Iterable[Mapping[str, Any]]) -> dict[tuple[str, str], int]:
+        out: dict[tuple[str, str], int] = {}
+        for f in items:
+            who = f"#{f['instance']}" if f.get("instance") else "(no object)"
+            key = (f["scene"], f"{f.get('kind') or f.get('is')} {who} as {f.get('label')}")
+            out[key] = out.get(key, 0) + 1
+        return out
+
+    rows: list[tuple[str, str, str, str]] = []
+    mb, ma = missed(before.get("missed", [])), missed(after.get("missed", []))
+    for key in set(mb) | set(ma):
+        if mb.get(key) != ma.get(key):
+            rows.append((*key, mb.get(key, "found"), ma.get(key, "found")))
+    fb, fa = false(before.get("false", [])), false(after.get("false", []))
+    for key in set(fb) | set(fa):
+        nb, na = fb.get(key, 0), fa.get(key, 0)
+        if nb != na:
+            rows.append((*key, _times("false", nb), _times("false", na)))
+    return [(f"{scene}: {obj}", b, a) for scene, obj, b, a in sorted(rows)]
+
+
+def _times(word: str, n: int) -> str:
+    """'-', the word, or the word and a count."""
+    return "-" if n == 0 else word if n == 1 else f"{word} x{n}"
+
+
 def stability_rows(
     before: Mapping[str, Any], after: Mapping[str, Any]
 ) -> list[tuple[str, str, str]]:
@@ -205,7 +262,7 @@ def _table(
 ) -> Table | str:
     """The rows as a table, unchanged ones dim (left out with ``changed``: a line saying
     so when nothing is left)."""
-    if changed:
+    if changed or not rows:
         rows = [row for row in rows if not _same(row)]
         if not rows:
             return f"{title}: no change"
@@ -300,6 +357,15 @@ def compare(
                 changed,
             )
         )
+        lists = b.get("mistakes", {}).get(key), a.get("mistakes", {}).get(key)
+        named = f"{title}: the objects that changed"
+        if None in lists and lists != (None, None):  # runs older than the lists say nothing
+            out.append(
+                f"{named}: not listed in the {'first' if lists[0] is None else 'second'} run"
+            )
+        elif None not in lists:
+            objects = object_rows(*lists) or []
+            out.append(_table(named, ["scan: object", "before", "after"], objects, changed))
     for part, title, heading, columns, rows in (
         (
             "robustness",

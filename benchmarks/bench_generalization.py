@@ -448,6 +448,34 @@ def mistakes_and_families(
     return false, families, family_class, missed
 
 
+#: What a false detection and a missed object are written with in ``mistakes``: the scan and
+#: what names the object across runs (the labelled instance, the ground-truth id), and why.
+FALSE_FIELDS = ("scene", "label", "is", "kind", "instance", "share")
+MISSED_FIELDS = ("scene", "id", "label", "kind", "cause", "iou", "as")
+
+
+def mistake_items(
+    false: Mapping[str, list[dict[str, Any]]], missed: Mapping[str, list[dict[str, Any]]]
+) -> dict[str, dict[str, list[dict[str, Any]]]]:
+    """Threshold -> every false detection and every missed object, one by one, by scan:
+    what ``python -m benchmarks compare`` lists when two runs differ (which object of which
+    scan was gained or lost), so that a change is judged on the objects, not only on counts.
+
+    >>> f = {"scene": "s", "id": 3, "label": "chair", "is": "sink", "kind": "sink",
+    ...      "instance": 7, "share": 0.9}
+    >>> mistake_items({"iou@0.25": [f]}, {"iou@0.25": []})["iou@0.25"]["false"][0]["instance"]
+    7
+    """
+    return {
+        key: {
+            "false": [{f: item.get(f) for f in FALSE_FIELDS} for item in false.get(key, [])],
+            "missed": [{f: item.get(f) for f in MISSED_FIELDS} for item in missed.get(key, [])],
+        }
+        for key in THRESHOLDS
+        if key in false or key in missed
+    }
+
+
 def missed_summary(missed: Mapping[str, list[dict[str, Any]]]) -> dict[str, dict[str, Any]]:
     """Threshold -> class -> how many objects were missed, by cause
     (:func:`benchmarks._generalization.missed_causes`), and by kind and cause."""
@@ -1195,6 +1223,7 @@ def simulated_figures(
         "chair_groups": chair_groups(families),
         "false_detections": false_summary(false),
         "missed": missed_summary(missed),
+        "mistakes": mistake_items(false, missed),
     }
     return figures, families, family_class
 
@@ -1335,6 +1364,7 @@ def _run_real(
         "per_class": dataset_figures(real),
         "false_detections": false_summary(real_false),
         "missed": missed_summary(real_missed),
+        "mistakes": mistake_items(real_false, real_missed),
         "seconds": round(time.perf_counter() - t0, 1),
     }
     console.print(

@@ -315,3 +315,90 @@ def test_markdown_gives_a_pipe_table_per_table_and_a_paragraph_per_line(tmp_path
     out = capsys.readouterr().out
     assert out.startswith(f"before: {a} (room auto)")
     assert "| chair | 8/10/12 | 9/10/12 | 0.80 / 0.67 | 0.90 / 0.75 |" in out
+
+
+def mistakes(missed=(), false=()):
+    """A part's ``mistakes`` at IoU 0.25: missed (scene, id, kind, cause, as) and false
+    (scene, instance, kind, label) objects."""
+    return {
+        "iou@0.25": {
+            "missed": [
+                {"scene": s, "id": i, "label": "chair", "kind": k, "cause": c, "iou": 0.6, "as": a}
+                for s, i, k, c, a in missed
+            ],
+            "false": [
+                {"scene": s, "label": lab, "is": k, "kind": k, "instance": i, "share": 0.9}
+                for s, i, k, lab in false
+            ],
+        }
+    }
+
+
+def test_object_rows_name_each_object_gained_or_lost_by_scan():
+    before = mistakes(
+        missed=[
+            ("office-s0", 4, "chair-dining", "scored", "table"),
+            ("bath-s1", 2, "chair", "vote", "chair"),
+        ],
+        false=[("bath-s1", 7, "toilet", "chair"), ("office-s0", 9, "desk", "chair")],
+    )["iou@0.25"]
+    after = mistakes(
+        missed=[("bath-s1", 2, "chair", "merged", "")],
+        false=[
+            ("office-s0", 9, "desk", "chair"),
+            ("office-s0", 9, "desk", "chair"),
+            ("office-s0", 0, "nothing", "table"),
+        ],
+    )["iou@0.25"]
+    assert C.object_rows(before, after) == [
+        ("bath-s1: chair #2", "missed (vote, as chair)", "missed (merged)"),
+        ("bath-s1: toilet #7 as chair", "false", "-"),
+        ("office-s0: chair-dining #4", "missed (scored, as table)", "found"),
+        ("office-s0: desk #9 as chair", "false", "false x2"),
+        ("office-s0: nothing (no object) as table", "-", "false"),
+    ]
+    assert C.object_rows(before, before) == []
+    assert C.object_rows(None, after) is None
+
+
+def test_compare_lists_the_objects_that_changed_and_says_when_a_run_has_no_list():
+    lost = ("office-s0", 4, "chair-dining", "scored", "table")
+    before, after = run_doc(), run_doc()
+    before["simulated"]["mistakes"] = mistakes(false=[("bath-s1", 7, "toilet", "chair")])
+    after["simulated"]["mistakes"] = mistakes(missed=[lost])
+    items = C.compare(before, after, changed=True)
+    tables = {i.title: i for i in items if isinstance(i, Table)}
+    assert cells(tables["Simulated rooms: the objects that changed"]) == [
+        ["bath-s1: toilet #7 as chair", "false", "-"],
+        ["office-s0: chair-dining #4", "found", "missed (scored, as table)"],
+    ]
+    assert "Simulated rooms: the objects that changed: no change" in C.compare(after, after)
+    # runs written before the lists: nothing when neither has them, a line when one lacks them
+    assert not any("objects that changed" in str(i) for i in C.compare(run_doc(), run_doc()))
+    assert "Simulated rooms: the objects that changed: not listed in the first run" in C.compare(
+        run_doc(), after
+    )
+
+
+def test_the_benchmark_lists_every_mistake_with_what_names_it_across_runs():
+    f = {"scene": "s", "id": 3, "label": "chair", "is": "toilet", "kind": "toilet"}
+    m = {"scene": "s", "id": 4, "label": "chair", "kind": "chair-dining", "cause": "scored"}
+    false = {"iou@0.25": [{**f, "instance": 7, "share": 0.9}]}
+    missed = {"iou@0.25": [{**m, "iou": 0.61, "cover": 0.9, "as": "table"}]}
+    items = B.mistake_items(false, missed)
+    assert list(items) == ["iou@0.25"]
+    # the detection's id changes from run to run: the labelled instance names the object
+    assert items["iou@0.25"]["false"] == [
+        {
+            "scene": "s",
+            "label": "chair",
+            "is": "toilet",
+            "kind": "toilet",
+            "instance": 7,
+            "share": 0.9,
+        }
+    ]
+    assert items["iou@0.25"]["missed"] == [
+        {"scene": "s", "id": 4, "label": "chair", "kind": "chair-dining", "cause": "scored",
+         "iou": 0.61, "as": "table"}
+    ]  # fmt: skip
