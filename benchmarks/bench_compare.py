@@ -260,8 +260,8 @@ def robustness_rows(
 def _table(
     title: str, columns: list[str], rows: list[tuple[Any, ...]], changed: bool
 ) -> Table | str:
-    """The rows as a table, unchanged ones dim (left out with ``changed``: a line saying
-    so when nothing is left)."""
+    """The rows as a table, unchanged ones dim (left out with ``changed``), or a line
+    saying there is no change when no row is left."""
     if changed or not rows:
         rows = [row for row in rows if not _same(row)]
         if not rows:
