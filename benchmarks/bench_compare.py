@@ -16,8 +16,9 @@ by side, so that the note of a change can give all three:
   scans changed as sensors change them (noise, a floor unseen, points doubled, half the
   points);
 - stability: mean and worst, and per change of the scan;
-- the objects that changed, one by one (for runs that list their ``mistakes``): which missed
-  object of which scan is found now or lost now, and which false detections came or went.
+- the objects that changed, one by one (for runs that list their ``mistakes``), in each part
+  and under each robustness change: which missed object of which scan is found now or lost
+  now, and which false detections came or went.
 
 A part one of the runs did not measure (``--only``) is left out, and said so. Rows that did
 not change are printed dim; ``--changed`` prints only the rows that did. ``--markdown``
@@ -387,7 +388,45 @@ def compare(
             out.append(f"{title}: not in {'the first' if b is None else 'the second'} run")
         else:
             out.append(_table(f"{title}: {heading}", columns, rows(b, a), changed))
+    robust = before.get("robustness"), after.get("robustness")
+    if None not in robust:
+        objects = robustness_objects(*robust)
+        listed = [_lists_robustness(r) for r in robust]
+        if objects is None and any(listed):
+            which = "first" if not listed[0] else "second"
+            out.append(f"Robustness: the objects that changed: not listed in the {which} run")
+        elif objects is not None:
+            out.append(
+                _table(
+                    "Robustness: the objects that changed",
+                    ["change / scan: object", "before", "after"],
+                    objects,
+                    changed,
+                )
+            )
     return out
+
+
+def _lists_robustness(part: Mapping[str, Any]) -> bool:
+    """Whether a run's robustness part lists its mistakes."""
+    return any("mistakes" in ch for ch in part.get("changes", {}).values())
+
+
+def robustness_objects(
+    before: Mapping[str, Any], after: Mapping[str, Any]
+) -> list[tuple[str, str, str]] | None:
+    """:func:`object_rows` of every change of the robustness part both runs made and
+    listed, each row named by its change; None when neither run lists any."""
+    rows: list[tuple[str, str, str]] = []
+    listed = False
+    ch_b, ch_a = before.get("changes", {}), after.get("changes", {})
+    for name in _ordered(list(ch_b) + list(ch_a)):
+        lists = [ch.get(name, {}).get("mistakes", {}).get("iou@0.25") for ch in (ch_b, ch_a)]
+        if None in lists:
+            continue
+        listed = True
+        rows += [(f"{name} / {obj}", b, a) for obj, b, a in object_rows(*lists) or []]
+    return rows if listed else None
 
 
 def markdown(items: Iterable[Table | str]) -> str:

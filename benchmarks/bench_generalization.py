@@ -88,6 +88,7 @@ from ontodetect.evaluation import (
     map_scenes,
     match_instances,
 )
+from ontodetect.evaluation._dataset import _first_pass_clusters
 
 #: Format tag of generalization.json.
 FORMAT = "ontodetect.bench.generalization/1"
@@ -848,7 +849,8 @@ def robustness_unit(
     unit: tuple[SceneSource, str], detect_options: Mapping[str, Any]
 ) -> dict[str, Any]:
     """Detect on one labelled scan changed by one of :func:`robustness_changes`; a unit of
-    work: TP/det/GT per class at point IoU 0.25 and the scan's measured floor scatter."""
+    work: TP/det/GT per class at point IoU 0.25, the scan's measured floor scatter, and its
+    false detections and missed objects (as :func:`mistakes_and_families` gives them)."""
     source, name = unit
     cloud, result, preds, _ = _detect_changed(
         source, name, robustness_changes()[name], detect_options
@@ -857,7 +859,12 @@ def robustness_unit(
     gts = instances_from_labels(
         fields["instance"], fields["class_id"], evaluation_classes(), index=cloud.index
     )
-    matched = match_instances(preds, gts, iou_threshold=THRESHOLDS["iou@0.25"]).pred_match
+    thr = THRESHOLDS["iou@0.25"]
+    matched = match_instances(preds, gts, iou_threshold=thr).pred_match
+    rows, what = scene_labels(source)
+    kinds = {iid: kind for iid, (_, kind) in what.items()}
+    false = false_detection_causes(preds, gts, rows, what, iou_threshold=thr)
+    missed = missed_causes(preds, gts, _first_pass_clusters(result), iou_threshold=thr)
     counts = {
         c: [
             sum(1 for p, m in zip(preds, matched) if p.label == c and m >= 0),
@@ -871,6 +878,10 @@ def robustness_unit(
         "change": name,
         "counts": counts,
         "floor_scatter": result.frame["floor_scatter"],
+        "false": [{"scene": source.name, **f} for f in false],
+        "missed": [
+            {"scene": source.name, "kind": kinds.get(m["id"], m["label"]), **m} for m in missed
+        ],
     }
 
 
@@ -893,6 +904,10 @@ def robustness(scans: Sequence[SceneSource], jobs: int, opts: Mapping[str, Any])
         out["changes"][n] = {
             "per_class": per_class,
             "floor_scatter": round(float(np.median(scatter)), 5) if scatter else None,
+            "mistakes": mistake_items(
+                {"iou@0.25": [f for r in mine for f in r["false"]]},
+                {"iou@0.25": [m for r in mine for m in r["missed"]]},
+            ),
         }
     return out
 

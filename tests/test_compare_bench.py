@@ -402,3 +402,22 @@ def test_the_benchmark_lists_every_mistake_with_what_names_it_across_runs():
         {"scene": "s", "id": 4, "label": "chair", "kind": "chair-dining", "cause": "scored",
          "iou": 0.61, "as": "table"}
     ]  # fmt: skip
+
+
+def test_the_robustness_part_lists_the_objects_that_changed_under_each_change():
+    before, after = run_doc(), run_doc()
+    lost = ("scene0005_00", 12, "chair", "merged", "table")
+    before["robustness"]["changes"]["noise 1 cm"]["mistakes"] = mistakes()
+    after["robustness"]["changes"]["noise 1 cm"]["mistakes"] = mistakes(missed=[lost])
+    assert C.robustness_objects(before["robustness"], after["robustness"]) == [
+        ("noise 1 cm / scene0005_00: chair #12", "found", "missed (merged, as table)")
+    ]
+    tables = {i.title: i for i in C.compare(before, after, changed=True) if isinstance(i, Table)}
+    assert cells(tables["Robustness: the objects that changed"]) == [
+        ["noise 1 cm / scene0005_00: chair #12", "found", "missed (merged, as table)"]
+    ]
+    # a run that does not list them: a line says so; neither run: nothing is said
+    assert C.robustness_objects(run_doc()["robustness"], after["robustness"]) is None
+    line = "Robustness: the objects that changed: not listed in the first run"
+    assert line in C.compare(run_doc(), after)
+    assert not any("Robustness: the objects" in str(i) for i in C.compare(run_doc(), run_doc()))

@@ -145,6 +145,14 @@ def test_a_robustness_unit_scores_the_changed_scan_against_its_own_labels(tmp_pa
     # own few millimetres (the doubled copy's 5 mm jitter adds less).
     assert noisy["floor_scatter"] == pytest.approx(G.NOISE_SIGMA, rel=0.3)
     assert clean["floor_scatter"] < noisy["floor_scatter"] - 0.002
+    # Its mistakes one by one (for `compare`) add up to its counts: a false detection per
+    # detection that found nothing, a missed object per object nothing found.
+    for run in (clean, noisy):
+        for c, (tp, det, gt) in run["counts"].items():
+            assert sum(f["label"] == c for f in run["false"]) == det - tp
+            assert sum(m["label"] == c for m in run["missed"]) == gt - tp
+        assert all(f["scene"] == "room" for f in run["false"] + run["missed"])
+        assert {m["cause"] for m in run["missed"]} <= set(G.MISSED_CAUSES)
 
 
 # -- false detections and families ---------------------------------------------------------
