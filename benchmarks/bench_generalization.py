@@ -83,12 +83,12 @@ from ontodetect.evaluation import (
     evaluate_dataset,
     evaluate_scenes,
     evaluation_classes,
+    first_pass_clusters,
     instances_from_labels,
     load_scene,
     map_scenes,
     match_instances,
 )
-from ontodetect.evaluation._dataset import _first_pass_clusters
 
 #: Format tag of generalization.json.
 FORMAT = "ontodetect.bench.generalization/1"
@@ -414,6 +414,27 @@ def scene_labels(source: SceneSource) -> tuple[np.ndarray, dict[int, tuple[str, 
     return rows_to_values(cloud.index, cloud.fields["instance"]), what
 
 
+def scene_mistakes(
+    name: str,
+    preds: Sequence[Instance],
+    gts: Sequence[Instance],
+    clusters: Sequence[Instance],
+    labels: tuple[np.ndarray, Mapping[int, tuple[str, str]]],
+    iou_threshold: float,
+) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+    """One scan's false detections (:func:`false_detection_causes`) and missed objects
+    (:func:`missed_causes`, with their kind; none without the first pass's clusters),
+    each with the scan's name; ``labels`` is :func:`scene_labels` of the scan."""
+    rows, what = labels
+    kinds = {iid: kind for iid, (_, kind) in what.items()}
+    false = false_detection_causes(preds, gts, rows, what, iou_threshold=iou_threshold)
+    missed = missed_causes(preds, gts, clusters, iou_threshold=iou_threshold) if clusters else []
+    return (
+        [{"scene": name, **f} for f in false],
+        [{"scene": name, "kind": kinds.get(m["id"], m["label"]), **m} for m in missed],
+    )
+
+
 def mistakes_and_families(
     outcomes: Sequence[SceneOutcome],
 ) -> tuple[
@@ -434,12 +455,9 @@ def mistakes_and_families(
         for g in o.gts:
             family_class.setdefault(kinds.get(g.id, g.label), g.label)
         for key, thr in THRESHOLDS.items():
-            for f in false_detection_causes(o.preds, o.gts, rows, what, iou_threshold=thr):
-                false[key].append({"scene": o.name, **f})
-            if o.clusters:
-                for m in missed_causes(o.preds, o.gts, o.clusters, iou_threshold=thr):
-                    kind = kinds.get(m["id"], m["label"])
-                    missed[key].append({"scene": o.name, "kind": kind, **m})
+            f, m = scene_mistakes(o.name, o.preds, o.gts, o.clusters, (rows, what), thr)
+            false[key] += f
+            missed[key] += m
             for fam, (found, total) in recall_by_group(
                 o.preds, o.gts, kinds, iou_threshold=thr
             ).items():
@@ -861,10 +879,8 @@ def robustness_unit(
     )
     thr = THRESHOLDS["iou@0.25"]
     matched = match_instances(preds, gts, iou_threshold=thr).pred_match
-    rows, what = scene_labels(source)
-    kinds = {iid: kind for iid, (_, kind) in what.items()}
-    false = false_detection_causes(preds, gts, rows, what, iou_threshold=thr)
-    missed = missed_causes(preds, gts, _first_pass_clusters(result), iou_threshold=thr)
+    clusters = first_pass_clusters(result)
+    false, missed = scene_mistakes(source.name, preds, gts, clusters, scene_labels(source), thr)
     counts = {
         c: [
             sum(1 for p, m in zip(preds, matched) if p.label == c and m >= 0),
@@ -878,10 +894,8 @@ def robustness_unit(
         "change": name,
         "counts": counts,
         "floor_scatter": result.frame["floor_scatter"],
-        "false": [{"scene": source.name, **f} for f in false],
-        "missed": [
-            {"scene": source.name, "kind": kinds.get(m["id"], m["label"]), **m} for m in missed
-        ],
+        "false": false,
+        "missed": missed,
     }
 
 

@@ -74,6 +74,7 @@ __all__ = [
     "evaluate_dataset",
     "evaluate_scene",
     "evaluation_classes",
+    "first_pass_clusters",
     "load_scene",
     "map_scenes",
     "read_scene_detections",
@@ -470,7 +471,7 @@ def evaluate_scene(
                 BoxInstance.make(d.label, d.center, d.size, d.yaw, d.score)
                 for d in result.detections
             ]
-            clusters = _first_pass_clusters(result)
+            clusters = first_pass_clusters(result)
             if save_dir is not None:
                 _save_detections(result, Path(save_dir) / name)
     except OntoDetectError as exc:
@@ -490,7 +491,7 @@ def evaluate_scene(
     )
 
 
-def _first_pass_clusters(result: Any) -> list[Instance]:
+def first_pass_clusters(result: Any) -> list[Instance]:
     """The first pass's clusters as instances labelled as that pass labelled them (the
     vote may have dropped the label since: the class it had stays in ``extra``)."""
     index = np.asarray(result.cloud.index)
