@@ -30,7 +30,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -359,14 +359,13 @@ def compare(
             )
         )
         lists = b.get("mistakes", {}).get(key), a.get("mistakes", {}).get(key)
-        named = f"{title}: the objects that changed"
-        if None in lists and lists != (None, None):  # runs older than the lists say nothing
-            out.append(
-                f"{named}: not listed in the {'first' if lists[0] is None else 'second'} run"
-            )
-        elif None not in lists:
-            objects = object_rows(*lists) or []
-            out.append(_table(named, ["scan: object", "before", "after"], objects, changed))
+        out += _objects(
+            title,
+            [x is not None for x in lists],
+            object_rows(*lists),
+            "scan: object",
+            changed,
+        )
     for part, title, heading, columns, rows in (
         (
             "robustness",
@@ -390,21 +389,32 @@ def compare(
             out.append(_table(f"{title}: {heading}", columns, rows(b, a), changed))
     robust = before.get("robustness"), after.get("robustness")
     if None not in robust:
-        objects = robustness_objects(*robust)
-        listed = [_lists_robustness(r) for r in robust]
-        if objects is None and any(listed):
-            which = "first" if not listed[0] else "second"
-            out.append(f"Robustness: the objects that changed: not listed in the {which} run")
-        elif objects is not None:
-            out.append(
-                _table(
-                    "Robustness: the objects that changed",
-                    ["change / scan: object", "before", "after"],
-                    objects,
-                    changed,
-                )
-            )
+        out += _objects(
+            "Robustness",
+            [_lists_robustness(r) for r in robust],
+            robustness_objects(*robust),
+            "change / scan: object",
+            changed,
+        )
     return out
+
+
+def _objects(
+    title: str,
+    listed: Sequence[bool],
+    rows: list[tuple[str, str, str]] | None,
+    first: str,
+    changed: bool,
+) -> list[Table | str]:
+    """A part's "objects that changed": the table of ``rows`` when both runs list their
+    mistakes, a line naming the run that does not when only one does, nothing when neither
+    does (runs written before the lists)."""
+    named = f"{title}: the objects that changed"
+    if all(listed):
+        return [_table(named, [first, "before", "after"], rows or [], changed)]
+    if any(listed):
+        return [f"{named}: not listed in the {'second' if listed[0] else 'first'} run"]
+    return []
 
 
 def _lists_robustness(part: Mapping[str, Any]) -> bool:
