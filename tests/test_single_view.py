@@ -251,3 +251,116 @@ def test_an_office_chair_seen_from_behind_is_found_in_a_single_frame():
     # the same points as a scan of unknown origin: a lone backrest is not a chair
     fused = frame.with_meta(sensor_position=None, organized=False)
     assert detect(fused, seed=0, config=plain).detections == []
+
+
+def _stand_ins(turn=0.0, move=(0.0, 0.0, 0.0)):
+    """Stand-in clusters for ``sight_shelters``, turned about the vertical by ``turn``
+    degrees and moved: a table's top (1.5 x 1.6 m at 0.74 m, its far edge at x = 2.5),
+    a chair's backrest seen over it 0.5 m beyond that edge, the same 1.5 m beyond it, a
+    desk's panel where the first backrest stands, and a small board (0.05 m²) at 0.74 m."""
+    from types import SimpleNamespace
+
+    c, s = math.cos(math.radians(turn)), math.sin(math.radians(turn))
+    turn_z = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    grid = np.stack(np.meshgrid(np.linspace(0, 1, 16), np.linspace(0, 1, 16)), -1).reshape(-1, 2)
+
+    def moved(p):
+        return np.asarray(p, dtype=float) @ turn_z.T + np.asarray(move)
+
+    def level(x0, y0, dx, dy, z):
+        pts = moved(np.c_[x0 + dx * grid[:, 0], y0 + dy * grid[:, 1], np.full(len(grid), z)])
+        plane = SimpleNamespace(tilt=0.0, area=dx * dy, height=z, inliers=np.arange(len(pts)))
+        return SimpleNamespace(
+            centers=pts, planes=[plane], bottom=0.0, height=z + 0.02, box=_box(pts)
+        )
+
+    def upright(x, bottom, top):
+        pts = moved(
+            np.c_[
+                np.full(len(grid), x), -0.2 + 0.4 * grid[:, 0], bottom + (top - bottom) * grid[:, 1]
+            ]
+        )
+        plane = SimpleNamespace(
+            tilt=85.0,
+            area=0.4 * (top - bottom),
+            height=(top + bottom) / 2,
+            inliers=np.arange(len(pts)),
+        )
+        return SimpleNamespace(
+            centers=pts, planes=[plane], bottom=bottom, height=top, box=_box(pts)
+        )
+
+    return [
+        level(1.0, -0.8, 1.5, 1.6, 0.74),  # the table's top
+        upright(3.0, 0.7, 0.95),  # a backrest 0.5 m beyond its far edge
+        upright(4.0, 0.7, 0.95),  # one 1.5 m beyond it
+        upright(3.0, 0.45, 0.74),  # a desk's panel, no higher than a top
+        level(3.2, 1.5, 0.25, 0.2, 0.74),  # a board too small to hide anything
+    ], moved
+
+
+def _box(pts):
+    from types import SimpleNamespace
+
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    return SimpleNamespace(center=(lo + hi) / 2, size=hi - lo, yaw=0.0)
+
+
+def test_the_top_in_the_way_hides_a_seat_however_far_the_chair_stands_back():
+    """Seen across a table, the backrest 0.5 m beyond its far edge has its seat hidden by
+    the table's top (no top stands within ``SHELTER_GAP`` of it); one 1.5 m beyond, a
+    desk's panel and anything seen from behind are not sheltered by it."""
+    from ontodetect.segment import shelter_heights, sight_shelters
+
+    seg, moved = _stand_ins()
+    got = sight_shelters(seg, moved([[0.0, 0.0, 1.5]])[0])
+    assert got[1] == pytest.approx(0.74)
+    assert shelter_heights(seg)[1] == -math.inf  # nothing beside it
+    assert got[2] == -math.inf  # the sight line to its seat passes beyond the top
+    assert got[3] == -math.inf  # no higher than a table's top: a desk's panel
+    assert got[0] == -math.inf and got[4] == -math.inf
+    behind = sight_shelters(seg, moved([[6.0, 0.0, 1.5]])[0])
+    assert behind[1] == -math.inf  # seen from behind, the table is not in the way
+    low = sight_shelters(seg, moved([[0.0, 0.0, 0.6]])[0])
+    assert low[1] == -math.inf  # from under the backrest's bottom nothing is seen over a top
+
+
+@given(
+    turn=st.floats(-180, 180, allow_nan=False),
+    move=st.tuples(*[st.floats(-50, 50, allow_nan=False)] * 3),
+)
+@settings(max_examples=25, deadline=None)
+def test_the_top_in_the_way_does_not_depend_on_where_the_scene_stands(turn, move):
+    from ontodetect.segment import sight_shelters
+
+    seg, moved = _stand_ins(turn, (move[0], move[1], 0.0))
+    got = sight_shelters(seg, moved([[0.0, 0.0, 1.5]])[0])
+    assert got[1] == pytest.approx(0.74)
+    assert np.isinf(got[[0, 2, 3, 4]]).all()
+
+
+def test_a_table_in_front_shelters_the_chair_behind_it_in_a_generated_frame():
+    """Through segmentation: a dining chair 0.6 m behind a table, seen across the table
+    from 1.8 m up, is sheltered by the table's top in the frame's description, not in a
+    scan of unknown origin, and by no top beside it."""
+    from ontodetect.segment import describe_clusters, segment, shelter_heights
+
+    table = dataclasses.replace(
+        place(make_furniture("table-dining", 1), 3.0, 3.0, 0.0), instance_id=7
+    )
+    far_edge = float(np.asarray(table.box.center)[1] + np.asarray(table.box.size)[1] / 2)
+    chair = make_furniture("chair-4leg", 1)
+    back = far_edge + 0.6 + float(np.asarray(chair.box.size)[1]) / 2
+    chair = dataclasses.replace(place(chair, 3.0, back, np.pi), instance_id=8)
+    scene = box_room([table, chair], size=(6.0, 6.0, 2.6))
+    pose = _look_at(np.array([[3.0, 0.6, 1.8]]), np.array([[3.0, 4.0, 0.6]]))[0]
+    frame = scan_rgbd_frame(scene, pose=pose, rng=0, stride=2, disparity_step=0).world_cloud()
+    seg = segment(frame, Config().with_overrides(["prepare.depth_smoothing=false"]))
+    instance = frame.fields["instance"]
+    k = max(range(len(seg)), key=lambda k: int((instance[seg[k].point_indices] == 8).sum()))
+    assert (instance[seg[k].point_indices] == 8).mean() > 0.9
+    seen = describe_clusters(seg, sensor_position(frame))[k]
+    top = max(float(p.height) for c in seg for p in c.planes if float(p.tilt) < 10 and p.area > 0.5)
+    assert seen.shelter == pytest.approx(top) and 0.7 < top < 0.77
+    assert shelter_heights(seg)[k] == -math.inf
+    assert describe_clusters(seg)[k].shelter == -math.inf

@@ -140,8 +140,9 @@ class ClusterDescription:
         point above the floor (m).
     shelter : float
         Height above the floor of the highest horizontal surface of a neighbouring
-        object (a desk beside a chair), which can hide this cluster's lower part;
-        ``-inf`` when there is none or it is unknown.
+        object (a desk beside a chair) or, in a single view, of one the sight line to
+        just under the cluster crosses (a table seen in front of a chair), which can
+        hide this cluster's lower part; ``-inf`` when there is none or it is unknown.
     ceiling : float
         Top of the search volume above the floor (the altitude cut-off, m): a
         cluster that reaches it may go on above, so its height is a lower bound.

@@ -20,7 +20,13 @@ from numpy.typing import NDArray
 from ..geometry import box_footprint
 from ..ontology import ClusterDescription
 from ..ontology._features import HIDDEN_DEPTH
-from ..ontology._score import HORIZONTAL_TILT, LEG_SHARE, SHELTER_AREA
+from ..ontology._score import (
+    HIDDEN_SEAT_TOP,
+    HORIZONTAL_TILT,
+    LEG_SHARE,
+    SHELTER_AREA,
+    SHELTER_TOLERANCE,
+)
 from ..preprocess._structure import FLOOR, WALL
 from ._segmentation import Cluster, Segmentation
 
@@ -46,6 +52,7 @@ __all__ = [
     "runs_on",
     "seen_below",
     "shelter_heights",
+    "sight_shelters",
     "standing_base",
     "sunk_below",
     "wall_gaps",
@@ -131,6 +138,7 @@ def describe_clusters(
     """
     ceiling = float(seg.config.prepare.altitude_cutoff)
     hidden = np.full(len(seg), -math.inf)
+    shelter = shelter_heights(seg)
     if viewpoint is not None and len(seg):
         eye = seg.prepared.level(np.asarray(viewpoint, dtype=np.float64))[0]
         hidden = hidden_heights(
@@ -138,6 +146,7 @@ def describe_clusters(
             np.array([c.box.center[:2] for c in seg], dtype=np.float64),
             eye,
         )
+        shelter = np.maximum(shelter, sight_shelters(seg, eye))
     # From one view the floor under a top is hidden by the top itself: not measured there.
     below = open_below(seg) if viewpoint is None else [None] * len(seg)
     lower, higher, sunk = _outline_shares(seg, (-1, 1), sunk=True)
@@ -147,7 +156,7 @@ def describe_clusters(
         describe_cluster(c, float(h), ceiling, float(b), o, s, a, k, r, float(w))
         for c, h, b, o, s, a, k, r, w in zip(
             seg,
-            shelter_heights(seg),
+            shelter,
             hidden,
             below,
             lower,
@@ -158,6 +167,59 @@ def describe_clusters(
             strict=True,
         )
     ]
+
+
+#: The sight line to what a top hides is drawn to this far (m) under the cluster's lowest
+#: point (``ontology._score.HIDDEN_MARGIN``).
+SIGHT_DROP = 0.1
+#: ... at the cluster's centre and this far (m) from it towards the sensor: a seat reaches
+#: a seat's depth in front of its backrest (EN 1335-1: 380-470 mm).
+SIGHT_REACH = (0.0, 0.2, 0.4)
+
+
+def sight_shelters(seg: Segmentation, eye: Sequence[float]) -> NDArray[np.float64]:
+    """(clusters,) in a single view, the height of the highest level plane of another
+    cluster (``SHELTER_AREA`` or more) that the sight line from ``eye`` to ``SIGHT_DROP``
+    under the cluster's lowest point, at its centre, crosses inside the plane's outline
+    (``SEEN_BELOW_CELL`` grid), when the plane stands no lower than the cluster's lowest
+    point less ``SHELTER_TOLERANCE``; ``-inf`` when none does, and for clusters no higher
+    than ``HIDDEN_SEAT_TOP``.
+
+    A chair seen across a table shows its backrest over the table's top: the top, not
+    anything beside the chair, hides its seat, however far the chair stands back from it.
+    :func:`shelter_heights` finds a top within ``SHELTER_GAP`` of the chair; this finds
+    the one in the way. What rises no higher than a table's top may be a desk's panel
+    seen under another desk's top, as with what a cluster hides itself
+    (``ontology._score.HIDDEN_SEAT_TOP``).
+    """
+    eye = np.asarray(eye, dtype=np.float64)
+    out = np.full(len(seg), -math.inf)
+    tops: list[tuple[int, float, NDArray[np.float64]]] = []
+    for k, c in enumerate(seg):
+        centers = np.asarray(c.centers)
+        for p in c.planes:
+            if float(p.tilt) < HORIZONTAL_TILT and float(p.area) >= SHELTER_AREA:
+                tops.append((k, float(p.height), centers[p.inliers, :2]))
+    outlines: dict[int, NDArray[np.int64]] = {}
+    for k, c in enumerate(seg):
+        bottom = float(c.bottom)
+        if eye[2] <= bottom or float(c.height) <= HIDDEN_SEAT_TOP:
+            continue
+        center = np.asarray(c.box.center, dtype=np.float64)[:2]
+        toward = eye[:2] - center
+        toward = toward / max(float(np.linalg.norm(toward)), 1e-9)
+        targets = center + np.outer(SIGHT_REACH, toward)
+        low = bottom - SIGHT_DROP
+        for t, (j, z, xy) in enumerate(tops):
+            if j == k or z < bottom - SHELTER_TOLERANCE or z >= eye[2] or z <= out[k]:
+                continue
+            s = (eye[2] - z) / (eye[2] - low)
+            cross = eye[:2] + s * (targets - eye[:2])
+            if t not in outlines:
+                outlines[t] = _cells_inside(xy)
+            if np.isin(_cell_keys(cross, SEEN_BELOW_CELL), outlines[t]).any():
+                out[k] = z
+    return out
 
 
 def wall_gaps(seg: Segmentation) -> NDArray[np.float64]:
