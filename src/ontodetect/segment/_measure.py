@@ -180,7 +180,8 @@ SIGHT_REACH = (0.0, 0.2, 0.4)
 def sight_shelters(seg: Segmentation, eye: Sequence[float]) -> NDArray[np.float64]:
     """(clusters,) in a single view, the height of the highest level plane of another
     cluster (``SHELTER_AREA`` or more) that the sight line from ``eye`` to ``SIGHT_DROP``
-    under the cluster's lowest point, at its centre, crosses inside the plane's outline
+    under the cluster's lowest point, at its centre and ``SIGHT_REACH`` from it towards the
+    sensor, crosses inside the plane's outline
     (``SEEN_BELOW_CELL`` grid), when the plane stands no lower than the cluster's lowest
     point less ``SHELTER_TOLERANCE``; ``-inf`` when none does, and for clusters no higher
     than ``HIDDEN_SEAT_TOP``.
