@@ -21,6 +21,7 @@ from ..geometry import box_footprint
 from ..ontology import ClusterDescription
 from ..ontology._features import HIDDEN_DEPTH
 from ..ontology._score import (
+    HIDDEN_MARGIN,
     HIDDEN_SEAT_TOP,
     HORIZONTAL_TILT,
     LEG_SHARE,
@@ -170,8 +171,8 @@ def describe_clusters(
 
 
 #: The sight line to what a top hides is drawn to this far (m) under the cluster's lowest
-#: point (``ontology._score.HIDDEN_MARGIN``).
-SIGHT_DROP = 0.1
+#: point: as far as a part hidden below what is seen may begin.
+SIGHT_DROP = HIDDEN_MARGIN
 #: ... at the cluster's centre and this far (m) from it towards the sensor: a seat reaches
 #: a seat's depth in front of its backrest (EN 1335-1: 380-470 mm).
 SIGHT_REACH = (0.0, 0.2, 0.4)
@@ -179,12 +180,11 @@ SIGHT_REACH = (0.0, 0.2, 0.4)
 
 def sight_shelters(seg: Segmentation, eye: Sequence[float]) -> NDArray[np.float64]:
     """(clusters,) in a single view, the height of the highest level plane of another
-    cluster (``SHELTER_AREA`` or more) that the sight line from ``eye`` to ``SIGHT_DROP``
-    under the cluster's lowest point, at its centre and ``SIGHT_REACH`` from it towards the
-    sensor, crosses inside the plane's outline
-    (``SEEN_BELOW_CELL`` grid), when the plane stands no lower than the cluster's lowest
-    point less ``SHELTER_TOLERANCE``; ``-inf`` when none does, and for clusters no higher
-    than ``HIDDEN_SEAT_TOP``.
+    cluster (``SHELTER_AREA`` or more) that a sight line from ``eye`` to ``SIGHT_DROP``
+    under the cluster's lowest point (at its centre and ``SIGHT_REACH`` from it towards
+    the sensor) crosses inside the plane's outline (``SEEN_BELOW_CELL`` grid), when the
+    plane stands no lower than the cluster's lowest point less ``SHELTER_TOLERANCE``;
+    ``-inf`` when none does, and for clusters no higher than ``HIDDEN_SEAT_TOP``.
 
     A chair seen across a table shows its backrest over the table's top: the top, not
     anything beside the chair, hides its seat, however far the chair stands back from it.
