@@ -195,12 +195,11 @@ def sight_shelters(seg: Segmentation, eye: Sequence[float]) -> NDArray[np.float6
     """
     eye = np.asarray(eye, dtype=np.float64)
     out = np.full(len(seg), -math.inf)
-    tops: list[tuple[int, float, NDArray[np.float64]]] = []
-    for k, c in enumerate(seg):
-        centers = np.asarray(c.centers)
-        for p in c.planes:
-            if float(p.tilt) < HORIZONTAL_TILT and float(p.area) >= SHELTER_AREA:
-                tops.append((k, float(p.height), centers[p.inliers, :2]))
+    tops = [
+        (k, float(p.height), np.asarray(c.centers)[p.inliers, :2])
+        for k, c in enumerate(seg)
+        for p in _sheltering_planes(c)
+    ]
     outlines: dict[int, NDArray[np.int64]] = {}
     for k, c in enumerate(seg):
         bottom = float(c.bottom)
@@ -586,14 +585,19 @@ def shelter_heights(seg: Segmentation) -> NDArray:
     tops = np.full(n, -math.inf)
     boxes = np.zeros((n, 2, 2))
     for k, c in enumerate(seg):
-        flat = [
-            float(p.height)
-            for p in c.planes
-            if float(p.tilt) < HORIZONTAL_TILT and float(p.area) >= SHELTER_AREA
-        ]
-        tops[k] = max(flat, default=-math.inf)
+        tops[k] = max((float(p.height) for p in _sheltering_planes(c)), default=-math.inf)
         boxes[k] = _footprint(c.box)
     return nearest_tops(boxes, tops)
+
+
+def _sheltering_planes(cluster: Any) -> list[Any]:
+    """The cluster's planes that can hide a part of another cluster: horizontal, at least
+    ``SHELTER_AREA`` large (:func:`shelter_heights`, :func:`sight_shelters`)."""
+    return [
+        p
+        for p in cluster.planes
+        if float(p.tilt) < HORIZONTAL_TILT and float(p.area) >= SHELTER_AREA
+    ]
 
 
 def nearest_tops(boxes: NDArray[np.float64], tops: NDArray[np.float64]) -> NDArray[np.float64]:
