@@ -10,6 +10,7 @@ from hypothesis import strategies as st
 from ontodetect import InvalidParameterError, point_cloud
 from ontodetect.config import Config
 from ontodetect.demo import run_demo
+from ontodetect.geometry import yaw_pose
 from ontodetect.pipeline import detect
 from ontodetect.synth import synthesize
 
@@ -236,13 +237,12 @@ def _level_clusters(rng, *groups, turn=0.0, move=(0.0, 0.0, 0.0)):
 
     from test_segmentation import rect
 
-    c, s = math.cos(math.radians(turn)), math.sin(math.radians(turn))
-    turn_z = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    pose = yaw_pose(move[0], move[1], math.radians(turn), move[2])
     out = []
     for rects, voxels in groups:
         centers, planes = [], []
         for corner, u, v in rects:
-            pts = rect(rng, corner, u, v, 0.02) @ turn_z.T + np.asarray(move)
+            pts = rect(rng, corner, u, v, 0.02) @ pose[:3, :3].T + pose[:3, 3]
             normal = np.cross(u, v) / np.linalg.norm(np.cross(u, v))
             first = sum(len(p) for p in centers)
             centers.append(pts)

@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 from ontodetect import InvalidParameterError, point_cloud
 from ontodetect.cloud import DataWarning, pixel_grid, sensor_position
 from ontodetect.config import Config
+from ontodetect.geometry import yaw_pose
 from ontodetect.ontology import ClusterDescription, builtin_ontology
 from ontodetect.ontology._score import (
     HIDDEN_SEAT_TOP,
@@ -260,12 +261,11 @@ def _stand_ins(turn=0.0, move=(0.0, 0.0, 0.0)):
     desk's panel where the first backrest stands, and a small board (0.05 m²) at 0.74 m."""
     from types import SimpleNamespace
 
-    c, s = math.cos(math.radians(turn)), math.sin(math.radians(turn))
-    turn_z = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    pose = yaw_pose(move[0], move[1], math.radians(turn), move[2])
     grid = np.stack(np.meshgrid(np.linspace(0, 1, 16), np.linspace(0, 1, 16)), -1).reshape(-1, 2)
 
     def moved(p):
-        return np.asarray(p, dtype=float) @ turn_z.T + np.asarray(move)
+        return np.asarray(p, dtype=float) @ pose[:3, :3].T + pose[:3, 3]
 
     def level(x0, y0, dx, dy, z):
         pts = moved(np.c_[x0 + dx * grid[:, 0], y0 + dy * grid[:, 1], np.full(len(grid), z)])
