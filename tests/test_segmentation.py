@@ -145,6 +145,28 @@ def test_a_top_at_seat_height_seeded_by_its_size_leaves_the_chairs_backrests(con
             assert best_cluster(labels, back)[1] == 1.0  # one cluster holds the whole back
 
 
+def test_tops_are_seeded_by_their_size_in_single_views_by_default(conference):
+    """``cluster.seed_by_size: views`` (the default): a scan with its sensor's position
+    seeds the 2.2 m top as a top, the same points as a fused scan (no sensor) by height,
+    as a seat. ``true`` and ``false`` still name ``on`` and ``off``."""
+    pts, truth = conference
+    kinds = {}
+    for name, cloud in (
+        ("scan", point_cloud(pts)),
+        ("view", point_cloud(pts).with_meta(sensor_position=[1.3, -2.5, 1.6])),
+    ):
+        seg = segment(cloud, Config(), seed=0)
+        k, share, _ = best_cluster(seg.labels_per_point(), truth == 1)
+        assert share >= 0.95
+        kinds[name] = seg[k].parts[0].kind
+    assert kinds == {"scan": "seat", "view": "top"}
+    assert Config().cluster.seed_by_size == "views"
+    on, off = (Config().with_overrides([f"cluster.seed_by_size={v}"]) for v in ("true", "false"))
+    assert (on.cluster.seed_by_size, off.cluster.seed_by_size) == ("on", "off")
+    with pytest.raises(InvalidParameterError, match="seed_by_size"):
+        Config().with_overrides(["cluster.seed_by_size=sometimes"])
+
+
 def test_plain_density_clustering_merges_them(dining):
     pts, truth, _ = dining
     cfg = Config().with_overrides(["cluster.method=dbscan"])

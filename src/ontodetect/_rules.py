@@ -105,14 +105,27 @@ class Pair(_Rule):
 
 @dataclass(frozen=True)
 class OneOf(_Rule):
-    """One of a fixed set of strings."""
+    """One of a fixed set of strings; with ``booleans``, false and true stand for the two
+    options named there (a switch that gained a third position).
+
+    Examples
+    --------
+    >>> OneOf(("off", "views", "on"), booleans=("off", "on")).check("cluster.x", True)
+    'on'
+    """
 
     options: tuple[str, ...]
+    booleans: tuple[str, str] | None = None
 
     def describe(self) -> str:
-        return "one of " + ", ".join(repr(o) for o in self.options)
+        words = "one of " + ", ".join(repr(o) for o in self.options)
+        if self.booleans is not None:
+            words += f" (false: {self.booleans[0]!r}, true: {self.booleans[1]!r})"
+        return words
 
     def check(self, name: str, value: Any) -> Any:
+        if isinstance(value, bool) and self.booleans is not None:
+            return self.booleans[int(value)]
         if not isinstance(value, str) or value not in self.options:
             raise InvalidParameterError(name, self.describe(), value)
         return value

@@ -388,13 +388,15 @@ class ClusterConfig(_Section):
     )
     # A horizontal part takes its seed style by height: seats up to 0.75 m (Table 4.1), so a
     # table top at 0.72-0.75 m (EN 527-1, EN 1730) claims chairs around it as a seat claims
-    # its backrest. On: by height and size, the part's length and width within one sigma of
-    # a seed part of the style (a 2.4 x 1.0 m top is no seat). Off by default: on the real
-    # development scans it finds 3 more tables and loses one chair (docs/benchmarks.md).
-    seed_by_size: bool = _param(
-        False,
-        Boolean(),
-        "A horizontal part takes its seed style by its height and size, not its height alone.",
+    # its backrest. By height and size, the part's length and width are within one sigma of
+    # a seed part of the style (a 2.4 x 1.0 m top is no seat). In single views by default:
+    # there it frees the chairs pushed under tables and costs nothing; on fused scans it
+    # costs a real chair and reads a box under a desk as one (docs/benchmarks.md).
+    seed_by_size: str = _param(
+        "views",
+        OneOf(("off", "views", "on"), booleans=("off", "on")),
+        "A horizontal part takes its seed style by its height and size, not its height "
+        "alone: 'views' in single views (a sensor position), 'on' everywhere, 'off' nowhere.",
     )
     max_grow: float = _param(1.2, POSITIVE, "Parts claim voxels up to this path length (m) away.")
     # Region growing: neighbours join while their normals differ by less than this.

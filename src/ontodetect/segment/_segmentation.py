@@ -14,7 +14,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import ConvexHull, QhullError
 
 from .._progress import progress
-from ..cloud import PointCloud, point_cloud
+from ..cloud import PointCloud, point_cloud, sensor_position
 from ..config import Config
 from ..errors import InvalidParameterError
 from ..ontology import Ontology, builtin_ontology
@@ -397,6 +397,13 @@ def _flags(surface: float, box: Box, planes: list | None, cfg) -> dict[str, str]
     return flags
 
 
+def _by_size(mode: str, prepared: PreparedScene) -> bool:
+    """Whether horizontal parts take their seed style by size as well as height
+    (``cluster.seed_by_size``): everywhere, nowhere, or in single views (a scan with its
+    sensor's position)."""
+    return mode == "on" or (mode == "views" and sensor_position(prepared.cloud) is not None)
+
+
 def cluster(
     prepared: PreparedScene,
     config: Config | None = None,
@@ -488,7 +495,7 @@ def cluster(
                     voxel_area=voxel_area,
                     variation=part_variation,
                     styles=rules.seed_styles(),
-                    sizes=rules.seed_sizes() if cc.seed_by_size else None,
+                    sizes=rules.seed_sizes() if _by_size(cc.seed_by_size, prepared) else None,
                 )
                 labels, seed_of = seeded_clusters(
                     centers,
