@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -259,8 +260,6 @@ def _stand_ins(turn=0.0, move=(0.0, 0.0, 0.0)):
     degrees and moved: a table's top (1.5 x 1.6 m at 0.74 m, its far edge at x = 2.5),
     a chair's backrest seen over it 0.5 m beyond that edge, the same 1.5 m beyond it, a
     desk's panel where the first backrest stands, and a small board (0.05 m²) at 0.74 m."""
-    from types import SimpleNamespace
-
     pose = yaw_pose(move[0], move[1], math.radians(turn), move[2])
     grid = np.stack(np.meshgrid(np.linspace(0, 1, 16), np.linspace(0, 1, 16)), -1).reshape(-1, 2)
 
@@ -300,8 +299,6 @@ def _stand_ins(turn=0.0, move=(0.0, 0.0, 0.0)):
 
 
 def _box(pts):
-    from types import SimpleNamespace
-
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     return SimpleNamespace(center=(lo + hi) / 2, size=hi - lo, yaw=0.0)
 
