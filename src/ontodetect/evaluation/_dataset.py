@@ -1,11 +1,13 @@
 """Evaluating a whole dataset: find its scenes, detect in each, match, aggregate.
 
-A dataset is a folder in one of four layouts (or one scene of them):
+A dataset is a folder in one of five layouts (or one scene of them):
 
 - ``ontodetect``: what ``ontodetect synth`` writes, ``scene_0000/cloud.ply`` + ``objects.json``
   + ``scene.json`` (or one such folder);
 - ``scannet-votenet``: many scans side by side, ``<scene>_vert.npy`` + ``_sem_label.npy`` +
   ``_ins_label.npy``;
+- ``sunrgbd-votenet``: SUN RGB-D frames side by side, ``<id>_pc.npz`` + ``_bbox.npy``
+  (points labelled by the oriented boxes that hold them);
 - ``scannet``: a release scan folder (``*_vh_clean_2.ply`` + aggregation + segments), or a
   folder of them;
 - ``s3dis``: a room folder holding ``Annotations/``, an area of rooms, or a folder of areas.

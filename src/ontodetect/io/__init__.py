@@ -176,6 +176,14 @@ FORMATS: dict[str, FormatInfo] = {
             "ScanNet as preprocessed for VoteNet: *_vert.npy, *_sem_label.npy, *_ins_label.npy",
         ),
         FormatInfo(
+            "sunrgbd-votenet",
+            "_sunrgbd",
+            "read_sunrgbd_votenet",
+            None,
+            ("_pc.npz",),
+            "SUN RGB-D frames as preprocessed for VoteNet: *_pc.npz, *_bbox.npy (oriented boxes)",
+        ),
+        FormatInfo(
             "s3dis",
             "_s3dis",
             "read_s3dis",
@@ -269,6 +277,8 @@ def detect_format(path: str | os.PathLike[str]) -> str:
         )
     if name.endswith(("_vert.npy", "_sem_label.npy", "_ins_label.npy")):
         return "scannet-votenet"
+    if name.endswith("_bbox.npy") and p.with_name(name[: -len("_bbox.npy")] + "_pc.npz").exists():
+        return "sunrgbd-votenet"
     if name.endswith("_vh_clean_2.ply") and any(p.parent.glob("*.aggregation.json")):
         return "scannet"
     suffix = p.suffix.lower()

@@ -13,9 +13,9 @@ __all__ = ["expand_inputs"]
 
 #: Characters that make a path that does not exist a glob pattern.
 GLOB_CHARS = "*?["
-#: Sibling files of a VoteNet ScanNet scan that are not scans of their own (the scan is
-#: its ``_vert.npy``).
-_NOT_SCANS = ("_sem_label.npy", "_ins_label.npy", "_bbox.npy")
+#: Sibling files of a VoteNet ScanNet scan or SUN RGB-D frame that are not scans of their
+#: own (the scan is its ``_vert.npy``, the frame its ``_pc.npz``).
+_NOT_SCANS = ("_sem_label.npy", "_ins_label.npy", "_bbox.npy", "_votes.npz")
 
 
 def expand_inputs(

@@ -22,13 +22,15 @@ __all__ = [
 ]
 
 #: Dataset layouts: "auto" finds out which of the others a folder is.
-DATASET_FORMATS = ("auto", "ontodetect", "scannet", "scannet-votenet", "s3dis")
+DATASET_FORMATS = ("auto", "ontodetect", "scannet", "scannet-votenet", "sunrgbd-votenet", "s3dis")
 #: Other names of layouts.
-FORMAT_ALIASES = {"synth": "ontodetect", "votenet": "scannet-votenet"}
+FORMAT_ALIASES = {"synth": "ontodetect", "votenet": "scannet-votenet", "sunrgbd": "sunrgbd-votenet"}
 #: Folder levels below the dataset folder searched for scenes (dataset / area / room).
 MAX_DEPTH = 2
 
 _VOTENET_SUFFIX = "_vert.npy"
+_SUNRGBD_SUFFIX = "_pc.npz"
+_SUNRGBD_BOXES = "_bbox.npy"
 _SCANNET_MESH = "_vh_clean_2.ply"
 _SCAN_ID = re.compile(r"(scene\d{4})_\d{2}")
 
@@ -44,9 +46,10 @@ class SceneSource:
         relative to the dataset folder (``scene_0003``, ``Area_1/office_2``). Stored
         detections are looked up as ``<detections dir>/<name>/detections.json``.
     path : str
-        The scene folder, or the ``*_vert.npy`` file of a VoteNet scan.
+        The scene folder, the ``*_vert.npy`` file of a VoteNet ScanNet scan or the
+        ``*_pc.npz`` file of a VoteNet SUN RGB-D frame.
     format : str
-        ``ontodetect``, ``scannet``, ``scannet-votenet`` or ``s3dis``.
+        ``ontodetect``, ``scannet``, ``scannet-votenet``, ``sunrgbd-votenet`` or ``s3dis``.
     group : str
         Scans of the same space share a group (rescans ``scene0000_00``/``_01`` are
         group ``scene0000``); calibration keeps a group on one side of a split.
@@ -105,6 +108,13 @@ def _scenes_in(folder: Path, root: Path, fmt: str, depth: int) -> list[SceneSour
         for vert in folder.glob(f"*{_VOTENET_SUFFIX}"):
             name = prefix + vert.name[: -len(_VOTENET_SUFFIX)]
             out.append(SceneSource(name, str(vert), "scannet-votenet", scene_group(name)))
+    if fmt in ("auto", "sunrgbd-votenet"):
+        prefix = "" if rel == "." else f"{rel}/"
+        for pc in folder.glob(f"*{_SUNRGBD_SUFFIX}"):
+            frame = pc.name[: -len(_SUNRGBD_SUFFIX)]
+            if (folder / f"{frame}{_SUNRGBD_BOXES}").is_file():  # labelled frames only
+                name = prefix + frame
+                out.append(SceneSource(name, str(pc), "sunrgbd-votenet", name))
     if depth < MAX_DEPTH:
         for sub in folder.iterdir():
             if sub.is_dir() and not sub.name.startswith((".", "__")):
@@ -119,8 +129,8 @@ def discover_scenes(path: str | os.PathLike[str], format: str = "auto") -> list[
     ----------
     path : str or PathLike
         A dataset folder, a scene folder, or a scene's file (``*_vert.npy``,
-        ``*_vh_clean_2.ply``, a synthetic scene's ``cloud.ply``).
-    format : {"auto", "ontodetect", "scannet", "scannet-votenet", "s3dis"}
+        ``*_pc.npz``, ``*_vh_clean_2.ply``, a synthetic scene's ``cloud.ply``).
+    format : {"auto", "ontodetect", "scannet", "scannet-votenet", "sunrgbd-votenet", "s3dis"}
         Layout to look for; "auto" recognises each folder by its files. Folders are
         searched up to two levels deep (dataset / area / room).
 
@@ -154,6 +164,11 @@ def discover_scenes(path: str | os.PathLike[str], format: str = "auto") -> list[
                 scene = name[: -len(suffix)]
                 vert = p.with_name(scene + _VOTENET_SUFFIX)
                 return [SceneSource(scene, str(vert), "scannet-votenet", scene_group(scene))]
+        for suffix in (_SUNRGBD_SUFFIX, _SUNRGBD_BOXES):
+            sibling = p.with_name(name[: -len(suffix)] + _SUNRGBD_SUFFIX)
+            if name.endswith(suffix) and sibling.is_file() and fmt in ("auto", "sunrgbd-votenet"):
+                frame = name[: -len(suffix)]
+                return [SceneSource(frame, str(sibling), "sunrgbd-votenet", frame)]
         layout = _folder_layout(p.parent)
         if layout is not None and fmt in ("auto", layout):
             return [SceneSource(p.parent.name, str(p.parent), layout, scene_group(p.parent.name))]
@@ -171,7 +186,8 @@ def discover_scenes(path: str | os.PathLike[str], format: str = "auto") -> list[
         raise ReadError(
             p,
             f"holds no scene of {what} (looked for synthetic scenes with scene.json + "
-            f"cloud.ply, *{_VOTENET_SUFFIX}, *{_SCANNET_MESH} and S3DIS Annotations/ "
+            f"cloud.ply, *{_VOTENET_SUFFIX}, *{_SUNRGBD_SUFFIX} with *{_SUNRGBD_BOXES}, "
+            f"*{_SCANNET_MESH} and S3DIS Annotations/ "
             f"up to {MAX_DEPTH} folders deep)",
         )
     return sorted(found, key=lambda s: natural_key(s.name))

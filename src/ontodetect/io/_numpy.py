@@ -12,10 +12,11 @@
   ``red green blue`` (or ``r g b``), ``nx ny nz``; every other field is kept.
 
 ``.npz`` holds named arrays: ``xyz`` (or ``points``; or separate ``x``, ``y``,
-``z``), ``rgb`` (or ``colors`` / ``colours``), ``normals``, ``index``, and every
-other numeric array with one row per point as a field of the same name. Arrays
-of another length are ignored (their names are listed in
-``meta["ignored_arrays"]``).
+``z``; or ``pc``, an (n, 6) x y z r g b table with colours 0..1, as VoteNet stores SUN
+RGB-D's frames, read by the .npy rules), ``rgb`` (or ``colors`` / ``colours``),
+``normals``, ``index``, and every other numeric array with one row per point as a
+field of the same name. Arrays of another length are ignored (their names are listed
+in ``meta["ignored_arrays"]``).
 
 Pickled objects are never loaded. Headers are checked against the file size
 before anything is allocated, so a damaged header cannot request terabytes.
@@ -58,7 +59,7 @@ DEFLATE_MAX_RATIO = 1100
 MAX_COLOR = 255
 
 _MAGIC = b"\x93NUMPY"
-_XYZ_KEYS = ("xyz", "points")
+_XYZ_KEYS = ("xyz", "points", "pc")
 _RGB_KEYS = ("rgb", "colors", "colours")
 _NORMAL_KEYS = ("normals",)
 #: Names the npz reader gives a meaning; fields cannot be written under them.
@@ -281,7 +282,7 @@ def read_npz(path: Path, *, on_nonfinite: str = "warn") -> PointCloud:
     Parameters
     ----------
     path : Path
-        An archive with ``xyz`` (or ``points``; or ``x``, ``y``, ``z``) and
+        An archive with ``xyz`` (or ``points`` or ``pc``; or ``x``, ``y``, ``z``) and
         optionally ``rgb`` / ``colors``, ``normals``, ``index`` and per-point
         fields.
     on_nonfinite : {"warn", "drop", "raise"}
@@ -321,7 +322,7 @@ def read_npz(path: Path, *, on_nonfinite: str = "warn") -> PointCloud:
     if n is None:
         raise ReadError(
             path,
-            "has no 'xyz' (or 'points', or 'x', 'y', 'z') array (found: "
+            "has no 'xyz' (or 'points', 'pc', or 'x', 'y', 'z') array (found: "
             f"{', '.join(sorted(arrays)) or 'nothing'})",
         )
 
