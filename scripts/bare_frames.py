@@ -5,16 +5,19 @@ Every frame of a generated set (``ontodetect synth ... --sensor rgbd-frame``, or
 generalization benchmark's frames set) is detected three ways: as stored, with its sensor's
 position and pixel grid; moved so that its sensor is at the origin and stored with its
 coordinates and colours only, with ``detect.infer_view`` off (a bare frame as it was
-taken before); and the same bare frame with ``detect.infer_view`` on. The chair detections
+taken before); and the same bare frame with ``detect.infer_view`` on. ``--points N ...``
+adds the bare frame cut to N points drawn at random (seed 0), as VoteNet stores SUN RGB-D's
+frames (50,000 points; 20,000 in its training). The chair detections
 are matched to the chair instances of at least 50 points at point IoU 0.25
 (``ontodetect.evaluation.match_instances``: one to one, best score first).
 
-    python scripts/bare_frames.py FRAMES_DIR [--jobs 2]
+    python scripts/bare_frames.py FRAMES_DIR [--jobs 2] [--points 50000 20000]
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import warnings
 from multiprocessing import Pool
 from pathlib import Path
@@ -43,7 +46,9 @@ def _chairs_found(result, instance, chairs) -> tuple[int, int]:
     return int((found >= 0).sum()), len(dets)
 
 
-def one_frame(folder: str) -> tuple[str, int, dict[str, tuple[int, int]]]:
+def one_frame(
+    folder: str, points: tuple[int, ...] = ()
+) -> tuple[str, int, dict[str, tuple[int, int]]]:
     warnings.simplefilter("ignore")
     from ontodetect import point_cloud
     from ontodetect.config import Config
@@ -64,19 +69,32 @@ def one_frame(folder: str) -> tuple[str, int, dict[str, tuple[int, int]]]:
         c = cloud if way == "with metadata" else bare
         result = detect(c, config=Config().with_overrides(sets), seed=0, jobs=1)
         out[way] = _chairs_found(result, instance, chairs)
+    for n in points:
+        rows = np.arange(len(bare))
+        if n < len(bare):
+            rows = np.sort(np.random.default_rng(0).choice(len(bare), n, replace=False))
+        cut = point_cloud(bare.xyz[rows], rgb=bare.rgb[rows])  # rows 0..n-1, as stored
+        result = detect(cut, seed=0, jobs=1)
+        out[_way(n)] = _chairs_found(result, instance[rows], chairs)
     return Path(folder).name, len(chairs), out
+
+
+def _way(points: int) -> str:
+    return f"bare, {points:,} points at random, taken as one view"
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("frames", help="a folder of generated frames (each with scene.json)")
     ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--points", type=int, nargs="*", default=[], help="also cut to N points")
     args = ap.parse_args()
     folders = sorted(str(p.parent) for p in Path(args.frames).glob("*/scene.json"))
-    totals = {way: [0, 0] for way in WAYS}
+    totals = {way: [0, 0] for way in [*WAYS, *map(_way, args.points)]}
     gt = 0
     with Pool(max(1, args.jobs)) as pool:
-        for _, chairs, found in pool.imap_unordered(one_frame, folders):
+        work = functools.partial(one_frame, points=tuple(args.points))
+        for _, chairs, found in pool.imap_unordered(work, folders):
             gt += chairs
             for way, (tp, det) in found.items():
                 totals[way][0] += tp
