@@ -209,6 +209,23 @@ def test_chair_assignment_and_factors():
     assert math.log(total) == pytest.approx(s.log_likelihood)
 
 
+def test_a_cluster_narrower_than_a_seat_is_a_poor_chair():
+    # A chair's footprint spans at least its seat's width (EN 1335-1 / EN 12520: 400 mm and
+    # more); a lamp or a strip of curtain seen as a "backrest" with its seat hidden is
+    # narrower. A whole chair and one seen in part (0.35 m) pay nothing for their length.
+    chair_class = builtin_ontology()["chair"]
+
+    def length_factor(length):
+        s = score_class(chair_class, replace(chair(), length=length, breadth=0.45))
+        (c,) = [c for c in s.constraints if c.part == "cluster" and c.feature == "length"]
+        return c.factor
+
+    assert length_factor(0.55) == pytest.approx(1.0)
+    assert length_factor(0.35) == pytest.approx(1.0)
+    assert length_factor(0.15) == pytest.approx(math.exp(-0.5))  # one sigma short
+    assert length_factor(0.15) < 0.7 * length_factor(0.45)
+
+
 def test_height_cut_at_the_search_volume_counts_as_at_least_that_tall():
     # Seat and backrest planes on a cluster that reaches the altitude cut-off: a cabinet
     # or a shelf cut at 1.4 m, whose true top is higher; chairs are never that tall.
