@@ -165,10 +165,11 @@ def discover_scenes(path: str | os.PathLike[str], format: str = "auto") -> list[
                 vert = p.with_name(scene + _VOTENET_SUFFIX)
                 return [SceneSource(scene, str(vert), "scannet-votenet", scene_group(scene))]
         for suffix in (_SUNRGBD_SUFFIX, _SUNRGBD_BOXES):
-            sibling = p.with_name(name[: -len(suffix)] + _SUNRGBD_SUFFIX)
-            if name.endswith(suffix) and sibling.is_file() and fmt in ("auto", "sunrgbd-votenet"):
+            if name.endswith(suffix) and fmt in ("auto", "sunrgbd-votenet"):
                 frame = name[: -len(suffix)]
-                return [SceneSource(frame, str(sibling), "sunrgbd-votenet", frame)]
+                points = p.with_name(frame + _SUNRGBD_SUFFIX)
+                if points.is_file():
+                    return [SceneSource(frame, str(points), "sunrgbd-votenet", frame)]
         layout = _folder_layout(p.parent)
         if layout is not None and fmt in ("auto", layout):
             return [SceneSource(p.parent.name, str(p.parent), layout, scene_group(p.parent.name))]

@@ -361,6 +361,24 @@ def _load_npy(path: Path) -> NDArray[Any]:
         raise ReadError(path, f"cannot read ({exc.strerror or exc})") from exc
 
 
+def _box_table(
+    path: Path, boxes: NDArray[Any], columns: int, names: str = ""
+) -> NDArray[np.float64]:
+    """A VoteNet box file's array (``_load_npy`` of ``path``), checked to be ``(K, columns)``
+    plain numbers, as float64 (``names``: what the columns are, for the message)."""
+    if (
+        boxes.ndim != 2
+        or (boxes.size and boxes.shape[1] != columns)
+        or not _plain_number(boxes.dtype)
+    ):
+        raise CorruptFileError(
+            path,
+            f"should be a (K, {columns}) array{names}, found shape {boxes.shape} of {boxes.dtype}",
+        )
+    with np.errstate(invalid="ignore"):
+        return boxes.astype(np.float64)
+
+
 def _label_array(path: Path, n: int, vert: Path) -> NDArray[np.int32]:
     arr = _load_npy(path)
     if arr.ndim != 1 or not _plain_number(arr.dtype):
@@ -465,18 +483,7 @@ def read_scannet_votenet(
         meta.update(_instance_meta(fields["instance"], fields["class_id"]))
     box_file = folder / f"{scene}_bbox.npy"
     if box_file.is_file():
-        boxes = _load_npy(box_file)
-        if (
-            boxes.ndim != 2
-            or (boxes.size and boxes.shape[1] != BOX_COLUMNS)
-            or not _plain_number(boxes.dtype)
-        ):
-            raise CorruptFileError(
-                box_file,
-                f"should be a (K, {BOX_COLUMNS}) array, found shape {boxes.shape} of {boxes.dtype}",
-            )
-        with np.errstate(invalid="ignore"):
-            meta["boxes"] = boxes.astype(np.float64).tolist()
+        meta["boxes"] = _box_table(box_file, _load_npy(box_file), BOX_COLUMNS).tolist()
     check_param("on_nonfinite", ON_NONFINITE, on_nonfinite)
     return point_cloud(
         vert[:, :3],

@@ -30,7 +30,7 @@ from ..cloud import PointCloud
 from ..errors import CorruptFileError, ReadError
 from ._labels import nyu40_name
 from ._numpy import read_npz
-from ._scannet import _load_npy, _plain_number
+from ._scannet import _box_table, _load_npy
 
 __all__ = ["SUNRGBD_CLASSES", "boxes_to_labels", "read_sunrgbd_votenet"]
 
@@ -49,7 +49,13 @@ SUNRGBD_CLASSES: tuple[tuple[str, int], ...] = (
 )
 #: Columns of a box row: centre (3), half sizes (3), heading, class index.
 BOX_COLUMNS = 8
-SUFFIXES = ("_pc.npz", "_bbox.npy", "_votes.npz")
+#: The frame's points, its boxes, VoteNet's training votes.
+POINTS, BOXES, VOTES = SUFFIXES = ("_pc.npz", "_bbox.npy", "_votes.npz")
+
+
+def _nyu40(boxes: NDArray[np.float64]) -> NDArray[np.int64]:
+    """The NYU40 id of each box's class."""
+    return np.array([nyu for _, nyu in SUNRGBD_CLASSES])[boxes[:, 7].astype(np.int64)]
 
 
 def boxes_to_labels(
@@ -70,6 +76,7 @@ def boxes_to_labels(
     class_id = np.zeros(n, np.int32)
     # Largest first, so that a smaller box inside it overwrites: the smallest holder wins.
     order = np.argsort(-np.prod(boxes[:, 3:6], axis=1), kind="stable")
+    nyu = _nyu40(boxes)
     for k in order:
         c, half, heading = boxes[k, 0:3], boxes[k, 3:6], boxes[k, 6]
         d = xyz - c
@@ -80,22 +87,15 @@ def boxes_to_labels(
         ly = d[:, 0] * sn + d[:, 1] * cs
         inside = (np.abs(lx) <= half[0]) & (np.abs(ly) <= half[1]) & (np.abs(d[:, 2]) <= half[2])
         instance[inside] = k + 1
-        class_id[inside] = SUNRGBD_CLASSES[int(boxes[k, 7])][1]
+        class_id[inside] = nyu[k]
     return instance, class_id
 
 
 def _read_boxes(path: Path) -> NDArray[np.float64]:
-    boxes = _load_npy(path)
-    if boxes.size == 0:
+    raw = _load_npy(path)
+    if raw.size == 0:
         return np.zeros((0, BOX_COLUMNS))
-    if boxes.ndim != 2 or boxes.shape[1] != BOX_COLUMNS or not _plain_number(boxes.dtype):
-        raise CorruptFileError(
-            path,
-            f"should be a (K, {BOX_COLUMNS}) array [cx cy cz l w h heading class], found "
-            f"shape {boxes.shape} of {boxes.dtype}",
-        )
-    with np.errstate(invalid="ignore"):
-        boxes = boxes.astype(np.float64)
+    boxes = _box_table(path, raw, BOX_COLUMNS, " [cx cy cz l w h heading class]")
     if not np.isfinite(boxes).all():
         raise CorruptFileError(path, "holds NaN or infinite values")
     cls = boxes[:, 7]
@@ -157,27 +157,28 @@ def read_sunrgbd_votenet(
             "is not a VoteNet SUN RGB-D file (expected a name ending in "
             f"{', '.join(SUFFIXES[:2])})",
         )
-    pc_file = path.parent / f"{frame}_pc.npz"
+    pc_file = path.parent / f"{frame}{POINTS}"
     if not pc_file.is_file():
         raise ReadError(pc_file, "missing: the points of the frame are needed")
     cloud = read_npz(pc_file, on_nonfinite=on_nonfinite)
     meta: dict[str, Any] = {"source": str(path), "scene_id": frame}
     if not labels:
         return cloud.with_meta(**meta)
-    box_file = path.parent / f"{frame}_bbox.npy"
+    box_file = path.parent / f"{frame}{BOXES}"
     if not box_file.is_file():
         raise ReadError(box_file, "missing: pass labels=False to read the points only")
     boxes = _read_boxes(box_file)
     instance, class_id = boxes_to_labels(cloud.xyz, boxes)
+    nyu = _nyu40(boxes)
     meta["boxes"] = [
         {
-            "class_id": SUNRGBD_CLASSES[int(b[7])][1],
+            "class_id": int(cid),
             "box": {"center": b[0:3].tolist(), "size": (2 * b[3:6]).tolist(), "yaw": -b[6]},
         }
-        for b in boxes
+        for b, cid in zip(boxes, nyu, strict=True)
     ]
     present = np.unique(instance[instance > 0])
-    meta["instance_class_ids"] = {int(i): SUNRGBD_CLASSES[int(boxes[i - 1, 7])][1] for i in present}
+    meta["instance_class_ids"] = {int(i): int(nyu[i - 1]) for i in present}
     meta["instance_labels"] = {i: nyu40_name(c) for i, c in meta["instance_class_ids"].items()}
     fields = {**cloud.fields, "instance": instance, "class_id": class_id}
     return cloud.replace(fields=fields).with_meta(**meta)
