@@ -18,7 +18,7 @@ from ontodetect.calibrate import (
     fit_gaussian,
     split_scenes,
 )
-from ontodetect.calibrate._gaussian import _constraint_paths
+from ontodetect.calibrate._gaussian import _constraint_paths, _write_spec
 from ontodetect.calibrate._run import _builtin_text
 from ontodetect.evaluation import discover_scenes
 from ontodetect.ontology import ClusterDescription, Gaussian, parse_ontology, score_class
@@ -158,6 +158,11 @@ def test_one_sided_constraints_stay_one_sided_and_only_loosen():
     plateau = fit_gaussian(Gaussian.plateau(0.3, 0.65, 0.12), inside, "length", **ml)
     assert plateau.side == "plateau"
     assert (plateau.mean, plateau.upper) == (0.3, pytest.approx(0.9 + 0.3 / 4))
+    # Tails of their own softness keep their ratio, and are written back as a pair.
+    two = fit_gaussian(Gaussian.plateau(65, 85, 12, 2.5), [70.0, 80.0, 88.0, 89.0], "tilt", **ml)
+    assert two.upper_sigma == pytest.approx(2.5 * two.sigma / 12)
+    spec = _write_spec({"min": 65, "max": 85, "soft": [12, 2.5]}, two)
+    assert isinstance(spec["soft"], list) and spec["soft"][1] < spec["soft"][0]
     # With the prior's weight the bound moves only part of the way.
     shrunk = fit_gaussian(Gaussian(0.45, 0.2, "min"), below, "fill", quantile=0.0)
     assert 0.2 < shrunk.mean < 0.45

@@ -6,6 +6,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from ontodetect.errors import InvalidOntologyError, InvalidParameterError
 from ontodetect.ontology import (
@@ -570,6 +572,40 @@ classes:
             "format: ontodetect.ontology/1\nclasses:\n  t:\n    parts:\n"
             "      top: {length: {min: 3, max: 1}}\n"
         )
+
+
+def test_plateau_tails_can_have_their_own_softness():
+    o = parse_ontology("""
+format: ontodetect.ontology/1
+classes:
+  t:
+    parts:
+      back: {tilt: {min: 65, max: 85, soft: [12, 2.5]}}
+""")
+    g = o["t"].part("back").constraints["tilt"]
+    assert float(g(65)) == 1.0 and float(g(85)) == 1.0
+    assert float(g(53)) == pytest.approx(math.exp(-0.5))
+    assert float(g(90)) == pytest.approx(math.exp(-2.0))
+    assert g.describe() == "in [65, 85] (soft 12, 2.5)"
+    for soft, match in (("[12]", "below, above"), ("[12, 0]", "> 0"), ("[12, x]", "number")):
+        with pytest.raises(InvalidOntologyError, match=match):
+            parse_ontology(
+                "format: ontodetect.ontology/1\nclasses:\n  t:\n    parts:\n"
+                f"      back: {{tilt: {{min: 65, max: 85, soft: {soft}}}}}\n"
+            )
+
+
+@given(
+    st.floats(-5, 5),
+    st.floats(0.1, 5),
+    st.floats(0.01, 3),
+    st.floats(-20, 20),
+)
+def test_a_plateau_with_one_softness_scores_as_before(low, width, soft, x):
+    # The same softness given once or for both tails is the same constraint.
+    one = Gaussian.plateau(low, low + width, soft)
+    two = Gaussian.plateau(low, low + width, soft, soft)
+    assert float(one.log(x)) == float(two.log(x))
 
 
 NEAR = """

@@ -198,7 +198,9 @@ def fit_gaussian(
         # Values (nearly) all alike: a plateau as wide as the σ floor around them.
         mid = (low + high) / 2
         low, high = mid - floor / 2, mid + floor / 2
-    return Gaussian.plateau(low, high, sigma)
+    # A tail softer or sharper than the other stays so, in the same ratio.
+    above = None if prior.upper_sigma is None else prior.upper_sigma * sigma / prior.sigma
+    return Gaussian.plateau(low, high, sigma, above)
 
 
 @dataclass(frozen=True)
@@ -240,6 +242,8 @@ class ConstraintFit:
             out = {"mean": x.mean, "sigma": x.sigma, "side": x.side}
             if getattr(x, "upper", None) is not None:
                 out["upper"] = x.upper
+            if getattr(x, "upper_sigma", None) is not None:
+                out["upper_sigma"] = x.upper_sigma
             return out
 
         out = {
@@ -307,6 +311,10 @@ def _spec_with(spec: Any, g: Any, digits: int) -> Any | None:
         out["soft"] = _round(g.sigma, digits)
         if out["soft"] <= 0:
             return None
+        if isinstance(spec["soft"], list) and g.upper_sigma is not None:
+            out["soft"] = [out["soft"], _round(g.upper_sigma, digits)]
+            if out["soft"][1] <= 0:
+                return None
     return out
 
 

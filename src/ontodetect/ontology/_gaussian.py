@@ -5,7 +5,8 @@ A constraint written ``{mean: 0.46, sigma: 0.05}`` is ``N(0.46, 0.05²)``; a ran
 width, so the bounds score ``exp(-1/2) ≈ 0.61`` and values far outside fall off
 quickly; ``{min: 0.3}`` and ``{max: 1.2}`` are one-sided: 1 on the allowed side
 and a Gaussian tail of the given (or default) softness beyond the bound;
-``{min: 0.5, max: 4, soft: 0.2}`` is a plateau: 1 inside, tails on both sides.
+``{min: 0.5, max: 4, soft: 0.2}`` is a plateau: 1 inside, tails on both sides;
+``{min: 65, max: 85, soft: [12, 4]}`` gives its two tails their own softness (below, above).
 
 The factor is the Gaussian's density scaled to 1 at its mean, so a perfect
 measurement contributes 1 and products of factors stay comparable between
@@ -38,9 +39,14 @@ class Gaussian:
         Centre (for one-sided constraints: the bound).
     sigma : float
         Standard deviation (> 0).
-    side : {"both", "min", "max"}
+    side : {"both", "min", "max", "plateau"}
         "both" is a plain Gaussian; "min" scores 1 for ``x >= mean``; "max"
-        scores 1 for ``x <= mean``.
+        scores 1 for ``x <= mean``; "plateau" scores 1 on ``[mean, upper]``.
+    upper : float, optional
+        The plateau's upper end.
+    upper_sigma : float, optional
+        The plateau's tail above ``upper`` (σ); ``sigma`` when not given, which is
+        then the tail on both sides.
 
     Examples
     --------
@@ -57,10 +63,15 @@ class Gaussian:
     sigma: float
     side: str = "both"
     upper: float | None = None
+    upper_sigma: float | None = None
 
     def __post_init__(self) -> None:
         if not math.isfinite(self.mean) or not math.isfinite(self.sigma) or self.sigma <= 0:
             raise ValueError(f"Gaussian needs a finite mean and sigma > 0, got {self}")
+        if self.upper_sigma is not None and (
+            self.side != "plateau" or not math.isfinite(self.upper_sigma) or self.upper_sigma <= 0
+        ):
+            raise ValueError(f"only a plateau has an upper sigma, finite and > 0, got {self}")
         if self.side not in ("both", "min", "max", "plateau"):
             raise ValueError(
                 f"Gaussian side must be 'both', 'min', 'max' or 'plateau', got {self.side!r}"
@@ -76,10 +87,22 @@ class Gaussian:
         return cls((low + high) / 2.0, max((high - low) / 2.0, MIN_SIGMA))
 
     @classmethod
-    def plateau(cls, low: float, high: float, softness: float | None = None) -> Gaussian:
-        """1 on ``[low, high]``, Gaussian tails of σ = ``softness`` outside."""
+    def plateau(
+        cls,
+        low: float,
+        high: float,
+        softness: float | None = None,
+        upper_softness: float | None = None,
+    ) -> Gaussian:
+        """1 on ``[low, high]``, Gaussian tails of σ = ``softness`` outside (above ``high``
+        of σ = ``upper_softness`` when given).
+
+        >>> g = Gaussian.plateau(65, 86, 12, 2)
+        >>> [round(float(g(x)), 3) for x in (53, 70, 88)]
+        [0.607, 1.0, 0.607]
+        """
         s = softness if softness is not None else max((high - low) * DEFAULT_SOFTNESS, MIN_SIGMA)
-        return cls(low, s, "plateau", high)
+        return cls(low, s, "plateau", high, upper_softness)
 
     @classmethod
     def at_least(cls, bound: float, softness: float | None = None) -> Gaussian:
@@ -97,7 +120,9 @@ class Gaussian:
         """Signed distance from the allowed region in units of σ (0 inside it)."""
         if self.side == "plateau":
             v = np.asarray(x, dtype=np.float64)
-            return (np.minimum(v - self.mean, 0.0) + np.maximum(v - self.upper, 0.0)) / self.sigma
+            below = np.minimum(v - self.mean, 0.0) / self.sigma
+            above = np.maximum(v - self.upper, 0.0) / (self.upper_sigma or self.sigma)
+            return below + above
         d = (np.asarray(x, dtype=np.float64) - self.mean) / self.sigma
         if self.side == "min":
             d = np.minimum(d, 0.0)
@@ -120,5 +145,8 @@ class Gaussian:
         if self.side == "max":
             return f"<= {self.mean:.3g} (soft {self.sigma:.2g})"
         if self.side == "plateau":
-            return f"in [{self.mean:.3g}, {self.upper:.3g}] (soft {self.sigma:.2g})"
+            soft = f"{self.sigma:.2g}"
+            if self.upper_sigma is not None:
+                soft += f", {self.upper_sigma:.2g}"
+            return f"in [{self.mean:.3g}, {self.upper:.3g}] (soft {soft})"
         return f"N({self.mean:.3g}, {self.sigma:.2g}²)"

@@ -618,6 +618,16 @@ def _gaussian(value: Any, path: tuple[Any, ...]) -> Gaussian:
             if not hi > lo:
                 raise _Problem(path, f"expected min < max, got min {lo:g}, max {hi:g}")
             soft = value.get("soft")
+            if isinstance(soft, list):
+                # [below, above]: each tail its own softness.
+                if len(soft) != 2:
+                    raise _Problem(
+                        path + ("soft",), f"expected soft or [below, above], got {soft!r}"
+                    )
+                below, above = (_number(v, path + ("soft", i)) for i, v in enumerate(soft))
+                if below <= 0 or above <= 0:
+                    raise _Problem(path + ("soft",), f"soft must be > 0, got {soft!r}")
+                return Gaussian.plateau(lo, hi, below, above)
             if soft is not None and _number(soft, path + ("soft",)) <= 0:
                 raise _Problem(path + ("soft",), f"soft must be > 0, got {soft!r}")
             return Gaussian.plateau(lo, hi, None if soft is None else float(soft))
