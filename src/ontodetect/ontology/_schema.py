@@ -617,34 +617,37 @@ def _gaussian(value: Any, path: tuple[Any, ...]) -> Gaussian:
             hi = _number(value["max"], path + ("max",))
             if not hi > lo:
                 raise _Problem(path, f"expected min < max, got min {lo:g}, max {hi:g}")
-            soft = value.get("soft")
-            if isinstance(soft, list):
-                # [below, above]: each tail its own softness.
-                if len(soft) != 2:
-                    raise _Problem(
-                        path + ("soft",), f"expected soft or [below, above], got {soft!r}"
-                    )
-                below, above = (_number(v, path + ("soft", i)) for i, v in enumerate(soft))
-                if below <= 0 or above <= 0:
-                    raise _Problem(path + ("soft",), f"soft must be > 0, got {soft!r}")
-                return Gaussian.plateau(lo, hi, below, above)
-            if soft is not None and _number(soft, path + ("soft",)) <= 0:
-                raise _Problem(path + ("soft",), f"soft must be > 0, got {soft!r}")
-            return Gaussian.plateau(lo, hi, None if soft is None else float(soft))
+            return Gaussian.plateau(lo, hi, *_softness(value, path, pair=True))
         for side, make in (("min", Gaussian.at_least), ("max", Gaussian.at_most)):
             if side in keys:
                 _only(value, {side, "soft"}, path)
-                soft = value.get("soft")
-                if soft is not None and _number(soft, path + ("soft",)) <= 0:
-                    raise _Problem(path + ("soft",), f"soft must be > 0, got {soft!r}")
-                return make(
-                    _number(value[side], path + (side,)), None if soft is None else float(soft)
-                )
+                soft, _ = _softness(value, path)
+                return make(_number(value[side], path + (side,)), soft)
     except ValueError as exc:  # from Gaussian itself
         raise _Problem(path, str(exc)) from exc
     raise _Problem(
         path, f"expected one of range, mean/sigma, min, max, min+max; got keys {sorted(keys)}"
     )
+
+
+def _softness(
+    value: dict[str, Any], path: tuple[Any, ...], pair: bool = False
+) -> tuple[float | None, float | None]:
+    """A bound's ``soft``, each number > 0: ``(None, None)`` when not given, ``(s, None)``
+    for one number and, for a plateau (``pair``), ``(below, above)`` for ``[below, above]``."""
+    soft = value.get("soft")
+    if soft is None:
+        return None, None
+    if pair and isinstance(soft, list):
+        # [below, above]: each tail its own softness.
+        if len(soft) != 2:
+            raise _Problem(path + ("soft",), f"expected soft or [below, above], got {soft!r}")
+        below, above = (_number(v, path + ("soft", i)) for i, v in enumerate(soft))
+    else:
+        below, above = _number(soft, path + ("soft",)), None
+    if below <= 0 or (above is not None and above <= 0):
+        raise _Problem(path + ("soft",), f"soft must be > 0, got {soft!r}")
+    return below, above
 
 
 def _only(mapping: dict[str, Any], allowed: set[str], path: tuple[Any, ...]) -> None:
