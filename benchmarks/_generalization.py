@@ -1,6 +1,7 @@
 """The reusable parts of the generalization benchmark, small enough to test on hand-made data.
 
-- :func:`reappearance`: how many reference detections come back after the input changed;
+- :func:`reappearance` / :func:`lost_references`: how many reference detections come back
+  after the input changed, and which do not;
 - :data:`STABILITY_TRANSFORMS` / :func:`stability_transforms`: the changes of input a
   detector should not notice (turns, a large offset, rounding, jitter, a shuffle, a subsample);
 - :func:`robustness_changes`: what sensors and pipelines do to real scans beyond that
@@ -41,6 +42,7 @@ __all__ = [
     "SUBSAMPLE_SHARE",
     "false_detection_causes",
     "instance_names",
+    "lost_references",
     "missed_causes",
     "reappearance",
     "recall_by_group",
@@ -67,14 +69,14 @@ NOTHING = "nothing"
 
 
 # -- stability -----------------------------------------------------------------------------
-def reappearance(
+def lost_references(
     reference: Sequence[Instance],
     other: Sequence[Instance],
     *,
     iou_threshold: float = STABILITY_IOU,
     kept: ArrayLike | None = None,
-) -> tuple[int, int]:
-    """How many reference detections reappear among ``other`` detections.
+) -> list[int]:
+    """Positions in ``reference`` of the detections that do not reappear among ``other``.
 
     A reference detection reappears when a detection of the same label overlaps it with
     point IoU >= ``iou_threshold``; pairs are made one to one, greedily by descending score
@@ -92,17 +94,12 @@ def reappearance(
         detections are cut to these rows first, so that a detection found again on every
         point still there counts, whatever share of its points the subsample dropped.
 
-    Returns
-    -------
-    reappeared, total : int
-        ``total`` is ``len(reference)``.
-
     Examples
     --------
     >>> ref = [Instance.make(1, "chair", range(10)), Instance.make(2, "table", range(20, 40))]
     >>> new = [Instance.make(1, "chair", range(2, 12)), Instance.make(2, "sofa", range(20, 40))]
-    >>> reappearance(ref, new)  # the chair: IoU 8/12; the table came back as a sofa
-    (1, 2)
+    >>> lost_references(ref, new)  # the chair: IoU 8/12; the table came back as a sofa
+    [1]
     """
     refs = list(reference)
     if kept is not None:
@@ -112,9 +109,31 @@ def reappearance(
             for r in refs
         ]
     if not refs:
-        return 0, 0
+        return []
     m = match_instances(list(other), refs, iou_threshold=iou_threshold)
-    return int(np.count_nonzero(m.gt_match >= 0)), len(refs)
+    return [int(i) for i in np.flatnonzero(np.asarray(m.gt_match) < 0)]
+
+
+def reappearance(
+    reference: Sequence[Instance],
+    other: Sequence[Instance],
+    *,
+    iou_threshold: float = STABILITY_IOU,
+    kept: ArrayLike | None = None,
+) -> tuple[int, int]:
+    """How many reference detections reappear among ``other`` (:func:`lost_references`,
+    whose parameters it takes): ``(reappeared, total)``, ``total`` being ``len(reference)``.
+
+    Examples
+    --------
+    >>> ref = [Instance.make(1, "chair", range(10)), Instance.make(2, "table", range(20, 40))]
+    >>> new = [Instance.make(1, "chair", range(2, 12)), Instance.make(2, "sofa", range(20, 40))]
+    >>> reappearance(ref, new)
+    (1, 2)
+    """
+    total = len(list(reference))
+    lost = lost_references(reference, other, iou_threshold=iou_threshold, kept=kept)
+    return total - len(lost), total
 
 
 def _turn(degrees: float) -> Callable[[PointCloud, np.random.Generator], PointCloud]:

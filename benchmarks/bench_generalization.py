@@ -61,9 +61,9 @@ from benchmarks._generalization import (
     class_figures,
     false_detection_causes,
     instance_names,
+    lost_references,
     missed_causes,
     pooled_orientations,
-    reappearance,
     recall_by_group,
     robustness_changes,
     rows_to_values,
@@ -587,7 +587,8 @@ def _detect_changed(
 def stability_unit(
     unit: tuple[SceneSource, str | None, tuple[float, ...]], detect_options: Mapping[str, Any]
 ) -> dict[str, Any]:
-    """Detect on one scan, as is (transform None) or changed; a unit of work."""
+    """Detect on one scan, as is (transform None) or changed; a unit of work. Detections on
+    the scan as is come with what each really is (:func:`reference_kinds`)."""
     source, name, turns = unit
     change = None if name is None else stability_transforms(turns)[name]
     cloud, _, dets, seconds = _detect_changed(source, name, change, detect_options)
@@ -596,8 +597,31 @@ def stability_unit(
         "transform": name,
         "detections": dets,
         "kept": None if name is None else np.asarray(cloud.index),
+        "kinds": reference_kinds(source, cloud, dets) if name is None else None,
         "seconds": seconds,
     }
+
+
+def reference_kinds(source: SceneSource, cloud: Any, dets: Sequence[Instance]) -> list[str]:
+    """What each detection really is, in order: its own label when it matches a labelled
+    object of that class at point IoU 0.25, else ``false: <class> (<kind>)`` of the object
+    holding most of its points (:func:`false_detection_causes`); ``?`` without labels."""
+    fields = cloud.fields
+    if "instance" not in fields or "class_id" not in fields:
+        return ["?"] * len(dets)
+    gts = instances_from_labels(
+        fields["instance"], fields["class_id"], evaluation_classes(), index=cloud.index
+    )
+    rows, what = scene_labels(source)
+    false = {
+        f["id"]: f
+        for f in false_detection_causes(dets, gts, rows, what, iou_threshold=THRESHOLDS["iou@0.25"])
+    }
+    out = []
+    for d in dets:
+        f = false.get(d.id)
+        out.append(d.label if f is None else f"false: {f['is']} ({f['kind']})")
+    return out
 
 
 def stability(
@@ -608,22 +632,35 @@ def stability(
 ) -> dict[str, Any]:
     """Share of reference detections that reappear, per transform and scan (detected with
     ``opts``, the same detect options as the other parts: seed, room prior, configuration
-    and ontology)."""
+    and ontology), and each reference detection that did not come back under some change
+    (``unsteady``: what it is and the changes it was lost under)."""
     names = list(stability_transforms(turns))
     units = [(s, t, tuple(turns)) for s in scans for t in [None, *names]]
     options = {**opts, "jobs": 1}
     work = functools.partial(stability_unit, detect_options=options)
     runs = map_scenes(work, units, jobs=jobs, description="Stability runs")
-    ref = {r["scene"]: r["detections"] for r in runs if r["transform"] is None}
+    return stability_figures([s.name for s in scans], names, runs)
+
+
+def stability_figures(
+    scans: Sequence[str], names: Sequence[str], runs: Sequence[Mapping[str, Any]]
+) -> dict[str, Any]:
+    """:func:`stability`'s result from its runs (:func:`stability_unit`'s, one per scan and
+    change, and one per scan as is)."""
+    ref = {r["scene"]: r for r in runs if r["transform"] is None}
     table: dict[str, dict[str, list[int]]] = {n: {} for n in names}
     counts: dict[str, dict[str, int]] = {n: {} for n in names}
+    lost_under: dict[tuple[str, int], list[str]] = {}
     for r in runs:
         if r["transform"] is not None:
             counts[r["transform"]][r["scene"]] = len(r["detections"])
-            found, total = reappearance(
-                ref[r["scene"]], r["detections"], iou_threshold=STABILITY_IOU, kept=r["kept"]
+            refs = ref[r["scene"]]["detections"]
+            lost = lost_references(
+                refs, r["detections"], iou_threshold=STABILITY_IOU, kept=r["kept"]
             )
-            table[r["transform"]][r["scene"]] = [found, total]
+            for i in lost:
+                lost_under.setdefault((r["scene"], i), []).append(r["transform"])
+            table[r["transform"]][r["scene"]] = [len(refs) - len(lost), len(refs)]
     shares = {
         n: {s: (f / t if t else None) for s, (f, t) in per.items()} for n, per in table.items()
     }
@@ -632,16 +669,30 @@ def stability(
         for n, per in shares.items()
     }
     every = [v for per in shares.values() for v in per.values()]
+    unsteady = [
+        {
+            "scene": s,
+            "id": d.id,
+            "label": d.label,
+            "score": round(float(d.score), 3),
+            "is": ref[s]["kinds"][i],
+            "lost_under": lost_under[(s, i)],
+        }
+        for s in scans
+        for i, d in enumerate(ref[s]["detections"])
+        if (s, i) in lost_under
+    ]
     return {
-        "scans": [s.name for s in scans],
-        "transforms": names,
+        "scans": list(scans),
+        "transforms": list(names),
         "iou": STABILITY_IOU,
-        "reference_detections": {s: len(d) for s, d in ref.items()},
+        "reference_detections": {s: len(r["detections"]) for s, r in ref.items()},
         "reappeared": table,
         "detections": counts,
         "per_transform": summary,
         "mean": _known(np.mean, every),
         "worst": _known(np.min, every),
+        "unsteady": sorted(unsteady, key=lambda u: -len(u["lost_under"])),
         "detect_seconds": round(sum(r["seconds"] for r in runs), 1),
     }
 
@@ -687,6 +738,10 @@ def pooled_seeds(runs: Mapping[int, Mapping[str, Any]]) -> dict[str, Any]:
         },
         "mean": _known(np.mean, [r["mean"] for r in results]),
         "worst": _known(np.min, [r["worst"] for r in results]),
+        "unsteady": sorted(
+            ({**u, "seed": k} for k, r in runs.items() for u in r.get("unsteady", [])),
+            key=lambda u: -len(u["lost_under"]),
+        ),
         "detect_seconds": round(sum(r["detect_seconds"] for r in results), 1),
         "by_seed": {str(k): dict(r) for k, r in runs.items()},
     }
@@ -859,6 +914,29 @@ def stability_table(title: str, res: Mapping[str, Any]) -> Table:
     mean = "-" if res["mean"] is None else f"{res['mean']:.2f}"
     worst = "-" if res["worst"] is None else f"{res['worst']:.2f}"
     t.add_row("[bold]all[/]", *[""] * len(res["scans"]), mean, worst)
+    return t
+
+
+def unsteady_table(title: str, res: Mapping[str, Any]) -> Table:
+    """The reference detections that did not come back under every change: the scan, the
+    detection (its label, score and what it really is) and the changes that lost it."""
+    t = Table(title=title, title_justify="left")
+    for name, justify in (("scan", "left"), ("detection", "left"), ("score", "right")):
+        t.add_column(name, justify=justify)
+    t.add_column("really is")
+    t.add_column("lost", justify="right")
+    t.add_column("under")
+    total = len(res["transforms"])
+    for u in res.get("unsteady", []):
+        seed = f", seed {u['seed']}" if "seed" in u else ""
+        t.add_row(
+            u["scene"],
+            f"#{u['id']} {u['label']}{seed}",
+            f"{u['score']:.2f}",
+            u["is"],
+            f"{len(u['lost_under'])}/{total}",
+            ", ".join(u["lost_under"]),
+        )
     return t
 
 
@@ -1374,6 +1452,10 @@ def _run_stability(
             stab,
         )
     )
+    if stab.get("unsteady"):
+        console.print(
+            unsteady_table("Stability: the reference detections that did not always reappear", stab)
+        )
     return _finish(args.out, doc, start)
 
 

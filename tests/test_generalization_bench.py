@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from benchmarks import _generalization as G
 from benchmarks import bench_generalization as B
+from rich.console import Console
 
 from ontodetect import point_cloud
 from ontodetect.evaluation import Instance
@@ -47,6 +48,79 @@ def test_reappearance_after_a_subsample_compares_on_the_rows_kept():
     other = [inst(1, "chair", range(0, 10, 3))]  # every kept row of the chair found again
     assert G.reappearance(reference, other) == (0, 1)  # IoU 4/10 on all rows
     assert G.reappearance(reference, other, kept=kept) == (1, 1)  # IoU 1 on the kept rows
+
+
+def test_lost_references_name_the_detections_that_did_not_come_back():
+    reference = [
+        inst(1, "chair", range(0, 10), 0.9),  # comes back shifted by 2: IoU 8/12
+        inst(2, "chair", range(10, 20), 0.8),  # comes back shifted by 5: IoU 5/15 < 0.5
+        inst(3, "table", range(20, 40), 0.7),  # comes back as a sofa
+    ]
+    other = [inst(1, "chair", range(2, 12)), inst(2, "chair", range(15, 25))]
+    other.append(inst(3, "sofa", range(20, 40)))
+    assert G.lost_references(reference, other) == [1, 2]
+    assert G.lost_references(reference, []) == [0, 1, 2]
+    assert G.lost_references([], other) == []
+    # Cut to the rows a subsample kept, the second chair overlaps its copy by 5/5.
+    assert G.lost_references(reference, other, kept=np.r_[0:10, 15:20]) == [2]
+
+
+def _unit(scene, transform, dets, kinds=None, kept=None):
+    """A hand-made :func:`stability_unit` result."""
+    return {
+        "scene": scene,
+        "transform": transform,
+        "detections": dets,
+        "kept": kept,
+        "kinds": kinds,
+        "seconds": 1.0,
+    }
+
+
+def test_stability_figures_name_each_detection_a_change_lost():
+    chair, table = inst(1, "chair", range(0, 10), 0.8), inst(2, "table", range(10, 30), 0.6)
+    sofa = inst(1, "sofa", range(0, 20), 0.4)
+    runs = [
+        _unit("a", None, [chair, table], ["chair", "false: desk (desk)"]),
+        _unit("a", "turn 90°", [chair]),  # the table is lost
+        _unit("a", "shuffle", [chair, table]),
+        _unit("b", None, [sofa], ["sofa"]),
+        _unit("b", "turn 90°", []),  # the sofa is lost
+        _unit("b", "shuffle", [inst(1, "chair", range(0, 20))]),  # ... and comes back a chair
+    ]
+    res = B.stability_figures(["a", "b"], ["turn 90°", "shuffle"], runs)
+    assert res["reappeared"] == {
+        "turn 90°": {"a": [1, 2], "b": [0, 1]},
+        "shuffle": {"a": [2, 2], "b": [0, 1]},
+    }
+    assert res["mean"] == pytest.approx((0.5 + 0 + 1 + 0) / 4) and res["worst"] == 0
+    assert [(u["scene"], u["id"], u["is"], u["lost_under"]) for u in res["unsteady"]] == [
+        ("b", 1, "sofa", ["turn 90°", "shuffle"]),  # the most often lost first
+        ("a", 2, "false: desk (desk)", ["turn 90°"]),
+    ]
+    assert B.unsteady_table("t", res).row_count == 2
+
+
+def test_reference_kinds_tell_true_detections_from_what_false_ones_are(tmp_path):
+    from ontodetect.evaluation import SceneSource, load_scene
+    from ontodetect.synth import synthesize, write_synth
+
+    write_synth(synthesize("dining_room", "rgbd", seed=5, points=30_000), tmp_path / "room")
+    source = SceneSource("room", str(tmp_path / "room"), "ontodetect", "room")
+    cloud, objects, _ = load_synth(tmp_path / "room")
+    rows = np.asarray(cloud.fields["instance"])
+    chair = next(o for o in objects if o["class"] == "chair" and (rows == o["id"]).any())
+    wall = next(o for o in objects if o["class"] == "wall" and (rows == o["id"]).any())
+    dets = [
+        inst(1, "chair", np.flatnonzero(rows == chair["id"]), 0.9),  # the chair itself
+        inst(2, "chair", np.flatnonzero(rows == wall["id"]), 0.5),  # a wall read as a chair
+        inst(3, "table", np.flatnonzero(rows == chair["id"]), 0.4),  # the chair as a table
+    ]
+    kinds = B.reference_kinds(source, load_scene(source).cloud, dets)
+    assert kinds == ["chair", "false: wall (wall)", f"false: chair ({chair['kind']})"]
+    # An unlabelled scan says nothing about them.
+    bare = point_cloud(cloud.xyz)
+    assert B.reference_kinds(source, bare, dets) == ["?", "?", "?"]
 
 
 def test_stability_transforms_keep_rows_and_do_what_they_say(rng):
@@ -401,6 +475,17 @@ def _stability_run(found, total, worst_share):
     }
 
 
+def test_the_detections_lost_under_several_seeds_say_their_seed():
+    lost = {"scene": "room", "id": 3, "label": "chair", "score": 0.3, "is": "chair"}
+    a = {**_stability_run(9, 10, 0.9), "unsteady": [{**lost, "lost_under": ["turn 90°"]}]}
+    b = {**_stability_run(6, 8, 0.75), "unsteady": [{**lost, "lost_under": ["turn 90°"] * 2}]}
+    pooled = B.pooled_seeds({0: a, 1: b})
+    assert [(u["seed"], len(u["lost_under"])) for u in pooled["unsteady"]] == [(1, 2), (0, 1)]
+    out = Console(record=True, width=200)
+    out.print(B.unsteady_table("t", pooled))
+    assert "#3 chair, seed 1" in out.export_text()
+
+
 def test_stability_over_several_seeds_pools_their_figures():
     runs = {0: _stability_run(9, 10, 0.9), 1: _stability_run(6, 8, 0.75)}
     pooled = B.pooled_seeds(runs)
@@ -410,6 +495,7 @@ def test_stability_over_several_seeds_pools_their_figures():
     assert pooled["mean"] == pytest.approx((0.9 + 0.75) / 2)
     assert pooled["worst"] == 0.75 == pooled["per_transform"]["turn 90°"]["worst"]
     assert pooled["by_seed"]["1"]["mean"] == 0.75 and pooled["detect_seconds"] == 4.0
+    assert pooled["unsteady"] == []  # runs written before detections were named
     # the table prints it as one run
     assert B.stability_table("t", pooled).row_count == 2
 
