@@ -15,7 +15,8 @@ by side, so that the note of a change can give all three:
 - robustness: TP / detections / ground truth and precision and recall per class on the real
   scans changed as sensors change them (noise, a floor unseen, points doubled, half the
   points);
-- stability: mean and worst, and per change of the scan;
+- stability: mean and worst, and per change of the scan; the reference detections some
+  change lost, by scan and by what they really are, and how many changes lost each;
 - the objects that changed, one by one (for runs that list their ``mistakes``), in each part
   and under each robustness change: which missed object of which scan is found now or lost
   now, and which false detections came or went.
@@ -232,6 +233,35 @@ def stability_rows(
     return rows
 
 
+def stability_objects(
+    before: Mapping[str, Any], after: Mapping[str, Any]
+) -> list[tuple[str, str, str]]:
+    """The reference detections that some change lost (``unsteady``), before and after:
+    per scan, label and what it really is, how many changes lost each such detection,
+    where that differs ("-": none was lost). Detections are not matched across runs by
+    id (a new detection renumbers the rest), only counted by what they are."""
+
+    def lost(part: Mapping[str, Any]) -> dict[tuple[str, str], list[int]]:
+        out: dict[tuple[str, str], list[int]] = {}
+        for u in part.get("unsteady", []):
+            out.setdefault((u["scene"], f"{u['label']} ({u['is']})"), []).append(
+                len(u["lost_under"])
+            )
+        return {k: sorted(v, reverse=True) for k, v in out.items()}
+
+    total = max(len(before.get("transforms", [])), len(after.get("transforms", [])))
+
+    def cell(counts: list[int] | None) -> str:
+        return ", ".join(f"lost {n}/{total}" for n in counts) if counts else "-"
+
+    lb, la = lost(before), lost(after)
+    keys = sorted(k for k in set(lb) | set(la) if lb.get(k) != la.get(k))
+    return [
+        (f"{scene}: {what}", cell(lb.get((scene, what))), cell(la.get((scene, what))))
+        for scene, what in keys
+    ]
+
+
 def robustness_rows(
     before: Mapping[str, Any],
     after: Mapping[str, Any],
@@ -387,6 +417,15 @@ def compare(
             out.append(f"{title}: not in {'the first' if b is None else 'the second'} run")
         else:
             out.append(_table(f"{title}: {heading}", columns, rows(b, a), changed))
+    steady = before.get("stability"), after.get("stability")
+    if None not in steady:
+        out += _objects(
+            "Stability",
+            ["unsteady" in st for st in steady],
+            stability_objects(*steady),
+            "scan: detection (really is)",
+            changed,
+        )
     robust = before.get("robustness"), after.get("robustness")
     if None not in robust:
         out += _objects(

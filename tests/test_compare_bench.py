@@ -147,6 +147,42 @@ def test_stability_rows_give_mean_and_worst_per_change():
     ]
 
 
+def _unsteady(scene, label, really, lost):
+    return {
+        "scene": scene,
+        "id": 1,
+        "label": label,
+        "score": 0.3,
+        "is": really,
+        "lost_under": ["turn 90°"] * lost,
+    }
+
+
+def test_stability_objects_count_each_unsteady_detection_by_what_it_is():
+    cabinet = ("conf", "chair", "false: cabinet (cabinet)")
+    before = {"transforms": ["turn 90°", "shuffle"], "unsteady": [
+        _unsteady(*cabinet, 2), _unsteady("room", "chair", "chair", 1),
+        _unsteady("room", "chair", "chair", 2),
+    ]}  # fmt: skip
+    after = {"transforms": ["turn 90°", "shuffle"], "unsteady": [
+        _unsteady("room", "chair", "chair", 2), _unsteady("room", "chair", "chair", 1),
+        _unsteady("room", "table", "table", 1),
+    ]}  # fmt: skip
+    assert C.stability_objects(before, after) == [
+        ("conf: chair (false: cabinet (cabinet))", "lost 2/2", "-"),
+        ("room: table (table)", "-", "lost 1/2"),
+    ]  # the two chairs of "room" are lost as often before as after, renumbered or not
+    doc_b, doc_a = run_doc(), run_doc()
+    doc_b["stability"].update(before)
+    doc_a["stability"].update(after)
+    tables = {i.title: i for i in C.compare(doc_b, doc_a, changed=True) if isinstance(i, Table)}
+    assert len(cells(tables["Stability: the objects that changed"])) == 2
+    # runs written before the list: a line says which lacks it
+    assert "Stability: the objects that changed: not listed in the first run" in C.compare(
+        run_doc(), doc_a
+    )
+
+
 def test_robustness_rows_give_each_change_and_class_before_and_after():
     before = run_doc()["robustness"]
     after = run_doc(noisy=(9, 10))["robustness"]
