@@ -605,7 +605,8 @@ def stability_unit(
 def reference_kinds(source: SceneSource, cloud: Any, dets: Sequence[Instance]) -> list[str]:
     """What each detection really is, in order: its own label when it matches a labelled
     object of that class at point IoU 0.25, else ``false: <class> (<kind>)`` of the object
-    holding most of its points (:func:`false_detection_causes`); ``?`` without labels."""
+    holding most of its points (:func:`false_detection_causes`; the kind where it is not the
+    class's name); ``?`` without labels."""
     fields = cloud.fields
     if "instance" not in fields or "class_id" not in fields:
         return ["?"] * len(dets)
@@ -620,7 +621,11 @@ def reference_kinds(source: SceneSource, cloud: Any, dets: Sequence[Instance]) -
     out = []
     for d in dets:
         f = false.get(d.id)
-        out.append(d.label if f is None else f"false: {f['is']} ({f['kind']})")
+        if f is None:
+            out.append(d.label)
+        else:  # the kind only where it says more than the class: "false: chair (chair-shell)"
+            kind = f" ({f['kind']})" if f["kind"] != f["is"] else ""
+            out.append(f"false: {f['is']}{kind}")
     return out
 
 

@@ -117,7 +117,7 @@ def test_reference_kinds_tell_true_detections_from_what_false_ones_are(tmp_path)
         inst(3, "table", np.flatnonzero(rows == chair["id"]), 0.4),  # the chair as a table
     ]
     kinds = B.reference_kinds(source, load_scene(source).cloud, dets)
-    assert kinds == ["chair", "false: wall (wall)", f"false: chair ({chair['kind']})"]
+    assert kinds == ["chair", "false: wall", f"false: chair ({chair['kind']})"]
     # An unlabelled scan says nothing about them.
     bare = point_cloud(cloud.xyz)
     assert B.reference_kinds(source, bare, dets) == ["?", "?", "?"]
