@@ -414,6 +414,15 @@ def scene_labels(source: SceneSource) -> tuple[np.ndarray, dict[int, tuple[str, 
     return rows_to_values(cloud.index, cloud.fields["instance"]), what
 
 
+def labelled_objects(cloud: Any) -> list[Instance]:
+    """The evaluated objects (:func:`evaluation_classes`) of a scan read with its per-point
+    labels, as rows of its file."""
+    fields = cloud.fields
+    return instances_from_labels(
+        fields["instance"], fields["class_id"], evaluation_classes(), index=cloud.index
+    )
+
+
 def scene_mistakes(
     name: str,
     preds: Sequence[Instance],
@@ -607,12 +616,9 @@ def reference_kinds(source: SceneSource, cloud: Any, dets: Sequence[Instance]) -
     object of that class at point IoU 0.25, else ``false: <class> (<kind>)`` of the object
     holding most of its points (:func:`false_detection_causes`; the kind where it is not the
     class's name); ``?`` without labels."""
-    fields = cloud.fields
-    if "instance" not in fields or "class_id" not in fields:
+    if "instance" not in cloud.fields or "class_id" not in cloud.fields:
         return ["?"] * len(dets)
-    gts = instances_from_labels(
-        fields["instance"], fields["class_id"], evaluation_classes(), index=cloud.index
-    )
+    gts = labelled_objects(cloud)
     rows, what = scene_labels(source)
     false = {
         f["id"]: f
@@ -956,10 +962,7 @@ def robustness_unit(
     cloud, result, preds, _ = _detect_changed(
         source, name, robustness_changes()[name], detect_options
     )
-    fields = cloud.fields
-    gts = instances_from_labels(
-        fields["instance"], fields["class_id"], evaluation_classes(), index=cloud.index
-    )
+    gts = labelled_objects(cloud)
     thr = THRESHOLDS["iou@0.25"]
     matched = match_instances(preds, gts, iou_threshold=thr).pred_match
     clusters = first_pass_clusters(result)
