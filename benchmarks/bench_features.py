@@ -1,0 +1,317 @@
+"""Features: what one measure of the ontology reads on every cluster, by what it really is.
+
+Run as ``python -m benchmarks features --feature NAME (--sim-set DIR | --real DIR) [...]``.
+
+A rule of the ontology is a bound on a measure (docs/ontology.md lists them). Before a bound
+is written from a standard or a physical argument, it is worth seeing what the measure reads
+on the objects the rule must keep and on those it should turn away: the desks a table's
+``open_below`` turns down, the WC seats a chair's seat should not take. Every scan of a
+labelled set (a simulated set written by ``python -m benchmarks generalization``, whose
+objects have a kind such as ``desk`` or ``chair-office``; real scans in ScanNet's VoteNet
+layout, whose objects have an NYU40 class) is segmented and its clusters described as one
+pass of the detector makes them (``segment``, ``describe_clusters`` with the sensor's
+position for a single view); each cluster is named by the labelled object holding most of
+its points (``nothing`` for unlabelled points).
+
+A part feature (``--feature sunk``) gives one value per plane of a cluster that passes
+the filters (``--tilt``, ``--height`` above the floor, ``--min-area``); a cluster feature
+(``--feature cluster.height``) one value per cluster. The table gives, per kind, how many
+values there are, how many were not measured (NaN), their quantiles and, with ``--bound``,
+the share inside a bound (``min=0.35``, ``max=0.3``, or both). ``--jsonl FILE`` writes every
+value with its scan, cluster, kind and plane.
+
+Examples::
+
+    python -m benchmarks features --sim-set bench-output/base5/sim-furnished-<digest> \\
+        --real path/to/scannet-dev --feature sunk --tilt 0 8 --height 0.3 0.62 --min-area 0.04
+    python -m benchmarks features --real path/to/scannet-dev --feature cluster.height \\
+        --bound max=1.3 --kinds chair,table
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import warnings
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from rich.console import Console
+from rich.table import Table
+
+from ontodetect.cloud import DataWarning, sensor_position
+from ontodetect.config import Config
+from ontodetect.errors import InvalidParameterError, OntoDetectError
+from ontodetect.evaluation import SceneSource, discover_scenes, load_scene, map_scenes
+from ontodetect.ontology import CLUSTER_FEATURES, FEATURES, PART_FEATURES, part_values
+
+#: Prefix of a cluster feature's name on the command line (``cluster.height``).
+CLUSTER_PREFIX = "cluster."
+#: Quantiles the table shows.
+QUANTILES = (0.0, 0.1, 0.5, 0.9, 1.0)
+#: What a cluster of unlabelled points is called.
+NOTHING = "nothing"
+
+
+@dataclass(frozen=True)
+class Survey:
+    """What to measure and on which planes.
+
+    Attributes
+    ----------
+    feature : str
+        A part feature's name, or ``cluster.<name>`` for a cluster feature.
+    tilt, height : (float, float)
+        Planes whose tilt (degrees) and height above the floor (m) lie in these closed
+        ranges; part features only.
+    min_area : float
+        Planes of at least this area (m²); part features only.
+    """
+
+    feature: str
+    tilt: tuple[float, float] = (0.0, 90.0)
+    height: tuple[float, float] = (-math.inf, math.inf)
+    min_area: float = 0.0
+
+    @property
+    def scope(self) -> str:
+        return "cluster" if self.feature.startswith(CLUSTER_PREFIX) else "part"
+
+    @property
+    def name(self) -> str:
+        return self.feature[len(CLUSTER_PREFIX) :] if self.scope == "cluster" else self.feature
+
+    def check(self) -> Survey:
+        """This survey, or InvalidParameterError naming what is wrong."""
+        known = CLUSTER_FEATURES if self.scope == "cluster" else PART_FEATURES
+        if self.name not in known:
+            prefix = CLUSTER_PREFIX if self.scope == "cluster" else ""
+            raise InvalidParameterError(
+                "--feature",
+                f"a {self.scope} feature ({', '.join(prefix + n for n in sorted(known))})",
+                self.feature,
+            )
+        for option, (lo, hi) in (("--tilt", self.tilt), ("--height", self.height)):
+            if not lo <= hi:
+                raise InvalidParameterError(option, "MIN MAX with MIN <= MAX", f"{lo} {hi}")
+        return self
+
+
+def parse_bound(text: str | None) -> tuple[float, float] | None:
+    """``min=A``, ``max=B`` or ``min=A,max=B`` as (low, high); None for no bound.
+
+    >>> parse_bound("min=0.35"), parse_bound("max=0.3,min=0.1"), parse_bound(None)
+    ((0.35, inf), (0.1, 0.3), None)
+    """
+    if text is None:
+        return None
+    low, high = -math.inf, math.inf
+    for item in text.split(","):
+        key, _, value = item.partition("=")
+        try:
+            number = float(value)
+        except ValueError:
+            number = math.nan
+        if key.strip() not in ("min", "max") or not math.isfinite(number):
+            raise InvalidParameterError("--bound", "min=A, max=B or min=A,max=B", text)
+        if key.strip() == "min":
+            low = number
+        else:
+            high = number
+    if low > high:
+        raise InvalidParameterError("--bound", "min <= max", text)
+    return low, high
+
+
+def cluster_names(source: SceneSource, cloud: Any, seg: Any) -> list[tuple[str, float]]:
+    """What each cluster of ``seg`` really is, by the labelled object holding most of its
+    points (the kind in a simulated set, the class in a real one), and that object's share
+    of the cluster's points."""
+    from benchmarks.bench_generalization import scene_labels
+
+    instance, what = scene_labels(source)
+    rows = np.arange(len(cloud)) if cloud.index is None else np.asarray(cloud.index)
+    out = []
+    for c in seg:
+        ids = instance[rows[np.asarray(c.point_indices)]]
+        if not len(ids):
+            out.append((NOTHING, 0.0))
+            continue
+        values, counts = np.unique(ids, return_counts=True)
+        best = int(values[int(np.argmax(counts))])
+        name = NOTHING if best <= 0 else what.get(best, (NOTHING, NOTHING))[1]
+        out.append((name, float(counts.max() / counts.sum())))
+    return out
+
+
+def survey_values(desc: Any, survey: Survey) -> list[tuple[int | None, float]]:
+    """(plane index or None, value) of one cluster description: every plane that passes
+    the survey's filters for a part feature, the cluster itself for a cluster feature."""
+    if survey.scope == "cluster":
+        return [(None, float(FEATURES["cluster"][survey.name].cluster(desc)))]
+    values = part_values(desc, survey.name)
+    out = []
+    for i, plane in enumerate(desc.planes):
+        if (
+            survey.tilt[0] <= float(plane.tilt) <= survey.tilt[1]
+            and survey.height[0] <= float(plane.height) <= survey.height[1]
+            and float(plane.area) >= survey.min_area
+        ):
+            out.append((i, float(values[i])))
+    return out
+
+
+def measure_scan(
+    source: SceneSource, survey: Survey, overrides: Sequence[str] = ()
+) -> list[dict[str, Any]]:
+    """Every value of the survey on one labelled scan (a unit of work for ``map_scenes``)."""
+    from ontodetect.segment import describe_clusters, segment
+
+    config = Config().with_overrides(list(overrides))
+    cloud = load_scene(source).cloud
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DataWarning)
+        seg = segment(cloud, config)
+        descs = describe_clusters(seg, sensor_position(cloud))
+    rows = []
+    for k, ((name, share), desc) in enumerate(zip(cluster_names(source, cloud, seg), descs)):
+        for plane, value in survey_values(desc, survey):
+            rows.append(
+                {
+                    "scene": source.name,
+                    "cluster": k,
+                    "plane": plane,
+                    "kind": name,
+                    "share": round(share, 4),
+                    "value": None if math.isnan(value) else value,
+                }
+            )
+    return rows
+
+
+def summarize(
+    rows: Sequence[Mapping[str, Any]], bound: tuple[float, float] | None = None
+) -> dict[str, dict[str, Any]]:
+    """Per kind (most values first): how many values, how many not measured, their
+    quantiles (:data:`QUANTILES`) and, with ``bound``, how many lie inside it.
+
+    >>> rows = [{"kind": "desk", "value": v} for v in (0.0, 0.1, 0.5)] + [
+    ...     {"kind": "table", "value": None}]
+    >>> s = summarize(rows, (0.35, math.inf))
+    >>> s["desk"]["n"], s["desk"]["inside"], s["desk"]["quantiles"][2], s["table"]["nan"]
+    (3, 1, 0.1, 1)
+    """
+    by: dict[str, list[float]] = {}
+    for r in rows:
+        by.setdefault(str(r["kind"]), []).append(math.nan if r["value"] is None else r["value"])
+    out = {}
+    for kind, values in sorted(by.items(), key=lambda kv: (-len(kv[1]), kv[0])):
+        v = np.asarray(values, dtype=np.float64)
+        known = v[~np.isnan(v)]
+        out[kind] = {
+            "n": len(v),
+            "nan": int(len(v) - len(known)),
+            "quantiles": [float(q) for q in np.quantile(known, QUANTILES)] if len(known) else [],
+            "inside": None
+            if bound is None
+            else int(np.count_nonzero((known >= bound[0]) & (known <= bound[1]))),
+        }
+    return out
+
+
+def summary_table(
+    title: str, summary: Mapping[str, Mapping[str, Any]], bound: tuple[float, float] | None
+) -> Table:
+    table = Table(title=title)
+    table.add_column("really is", no_wrap=True)
+    for name in ("values", "NaN", "min", "10 %", "median", "90 %", "max"):
+        table.add_column(name, justify="right")
+    if bound is not None:
+        table.add_column(f"in [{bound[0]:g}, {bound[1]:g}]", justify="right", no_wrap=True)
+    for kind, s in summary.items():
+        qs = [f"{q:.3g}" for q in s["quantiles"]] or ["-"] * len(QUANTILES)
+        cells = [kind, str(s["n"]), str(s["nan"]), *qs]
+        if bound is not None:
+            known = s["n"] - s["nan"]
+            cells.append(f"{s['inside']} of {known}" if known else "-")
+        table.add_row(*cells)
+    return table
+
+
+def scan_sources(sim_set: Path | None, real: Path | None) -> list[SceneSource]:
+    """The labelled scans of a simulated set (its manifest's scans) and of a real folder."""
+    from benchmarks.bench_generalization import manifest_scans
+
+    sources = []
+    if sim_set is not None:
+        names = sorted(manifest_scans(sim_set))
+        if not names:
+            raise InvalidParameterError(
+                "--sim-set", "a simulated set's folder (manifest.json)", sim_set
+            )
+        sources += [SceneSource(n, str(sim_set / n), "ontodetect", n) for n in names]
+    if real is not None:
+        sources += discover_scenes(real, "scannet-votenet")
+    return sources
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(
+        prog="python -m benchmarks features", description=__doc__.splitlines()[0]
+    )
+    ap.add_argument("--feature", required=True, help="a part feature, or cluster.<name>")
+    ap.add_argument("--sim-set", type=Path, help="a simulated set written by the benchmark")
+    ap.add_argument("--real", type=Path, help="labelled real scans (ScanNet, VoteNet layout)")
+    ap.add_argument("--tilt", type=float, nargs=2, default=(0.0, 90.0), metavar=("MIN", "MAX"))
+    ap.add_argument(
+        "--height", type=float, nargs=2, default=(-math.inf, math.inf), metavar=("MIN", "MAX")
+    )
+    ap.add_argument("--min-area", type=float, default=0.0, help="smallest plane (m²)")
+    ap.add_argument("--bound", help="count the values inside min=A, max=B or min=A,max=B")
+    ap.add_argument("--kinds", help="only these kinds, comma-separated")
+    ap.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="a configuration override, as ontodetect detect --set takes it (repeatable)",
+    )
+    ap.add_argument("--jobs", type=int, default=2, help="worker processes (0: one per CPU)")
+    ap.add_argument("--jsonl", type=Path, help="write every value to this file")
+    args = ap.parse_args(argv)
+    try:
+        survey = Survey(args.feature, tuple(args.tilt), tuple(args.height), args.min_area).check()
+        bound = parse_bound(args.bound)
+        Config().with_overrides(args.overrides)
+        if args.sim_set is None and args.real is None:
+            raise InvalidParameterError("--sim-set", "a simulated set, --real, or both", None)
+        sources = scan_sources(args.sim_set, args.real)
+        units = [(s, survey, tuple(args.overrides)) for s in sources]
+        runs = map_scenes(_unit, units, jobs=args.jobs, description="Measuring clusters")
+    except OntoDetectError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    rows = [r for run in runs for r in run]
+    if args.kinds:
+        keep = {k.strip() for k in args.kinds.split(",")}
+        rows = [r for r in rows if r["kind"] in keep]
+    if args.jsonl is not None:
+        args.jsonl.write_text("".join(json.dumps(r) + "\n" for r in rows))
+    title = f"{survey.feature} on {len(sources)} scans, by what the cluster really is"
+    Console().print(summary_table(title, summarize(rows, bound), bound))
+    return 0
+
+
+def _unit(unit: tuple[SceneSource, Survey, tuple[str, ...]]) -> list[dict[str, Any]]:
+    source, survey, overrides = unit
+    return measure_scan(source, survey, overrides)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
