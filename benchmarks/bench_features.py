@@ -20,12 +20,20 @@ values there are, how many were not measured (NaN), their quantiles and, with ``
 the share inside a bound (``min=0.35``, ``max=0.3``, or both). ``--jsonl FILE`` writes every
 value with its scan, cluster, kind and plane.
 
+With ``--of CLASS`` the measure is read as that class's score reads it: on its best
+assignment of planes to parts in every cluster, ``<part>.<feature>`` on the plane it gives
+the part and ``<a>~<b>.<feature>`` (a relation feature, ``behind``, ``gap``...) between
+the planes of two parts, not measured where a part has no plane. ``--ontology`` and
+``--ontology-only`` take ontology files as ``ontodetect detect`` does.
+
 Examples::
 
     python -m benchmarks features --sim-set bench-output/base5/sim-furnished-<digest> \\
         --real path/to/scannet-dev --feature sunk --tilt 0 8 --height 0.3 0.62 --min-area 0.04
     python -m benchmarks features --real path/to/scannet-dev --feature cluster.height \\
         --bound max=1.3 --kinds chair,table
+    python -m benchmarks features --real path/to/scannet-dev --of chair \\
+        --feature backrest~seat.behind --bound max=-0.1
 """
 
 from __future__ import annotations
@@ -48,7 +56,14 @@ from ontodetect.cloud import DataWarning, sensor_position
 from ontodetect.config import Config
 from ontodetect.errors import InvalidParameterError, OntoDetectError
 from ontodetect.evaluation import SceneSource, discover_scenes, load_scene, map_scenes
-from ontodetect.ontology import CLUSTER_FEATURES, FEATURES, PART_FEATURES, part_values
+from ontodetect.ontology import (
+    CLUSTER_FEATURES,
+    FEATURES,
+    PART_FEATURES,
+    RELATION_FEATURES,
+    part_values,
+    score_class,
+)
 
 #: Prefix of a cluster feature's name on the command line (``cluster.height``).
 CLUSTER_PREFIX = "cluster."
@@ -65,30 +80,52 @@ class Survey:
     Attributes
     ----------
     feature : str
-        A part feature's name, or ``cluster.<name>`` for a cluster feature.
+        A part feature's name, or ``cluster.<name>`` for a cluster feature. With ``of``,
+        ``<part>.<name>`` (a part feature on the plane the class gives that part) or
+        ``<a>~<b>.<name>`` (a relation feature between the planes of parts a and b).
     tilt, height : (float, float)
         Planes whose tilt (degrees) and height above the floor (m) lie in these closed
-        ranges; part features only.
+        ranges; part features without ``of`` only.
     min_area : float
-        Planes of at least this area (m²); part features only.
+        Planes of at least this area (m²); part features without ``of`` only.
+    of : str, optional
+        A class of the ontology: the feature is read on its best assignment of planes to
+        parts in every cluster (NaN where a part has no plane), as its score reads it.
     """
 
     feature: str
     tilt: tuple[float, float] = (0.0, 90.0)
     height: tuple[float, float] = (-math.inf, math.inf)
     min_area: float = 0.0
+    of: str | None = None
 
     @property
     def scope(self) -> str:
-        return "cluster" if self.feature.startswith(CLUSTER_PREFIX) else "part"
+        """``cluster``, ``part`` or ``relation``."""
+        if self.feature.startswith(CLUSTER_PREFIX):
+            return "cluster"
+        return "relation" if self.of is not None and "~" in self.feature else "part"
 
     @property
     def name(self) -> str:
-        return self.feature[len(CLUSTER_PREFIX) :] if self.scope == "cluster" else self.feature
+        """The feature's own name."""
+        if self.scope == "cluster":
+            return self.feature[len(CLUSTER_PREFIX) :]
+        return self.feature.rpartition(".")[2] if self.of is not None else self.feature
 
-    def check(self) -> Survey:
-        """This survey, or InvalidParameterError naming what is wrong."""
-        known = CLUSTER_FEATURES if self.scope == "cluster" else PART_FEATURES
+    @property
+    def parts(self) -> tuple[str, ...]:
+        """With ``of``: the part, or the two parts of a relation, the feature is read on."""
+        if self.of is None or self.scope == "cluster":
+            return ()
+        return tuple(self.feature.rpartition(".")[0].split("~"))
+
+    def check(self, ontology: Any = None) -> Survey:
+        """This survey, or InvalidParameterError naming what is wrong (``ontology``: the
+        one ``of`` names a class of; the built-in one by default)."""
+        known = {"cluster": CLUSTER_FEATURES, "part": PART_FEATURES}.get(
+            self.scope, RELATION_FEATURES
+        )
         if self.name not in known:
             prefix = CLUSTER_PREFIX if self.scope == "cluster" else ""
             raise InvalidParameterError(
@@ -99,7 +136,35 @@ class Survey:
         for option, (lo, hi) in (("--tilt", self.tilt), ("--height", self.height)):
             if not lo <= hi:
                 raise InvalidParameterError(option, "MIN MAX with MIN <= MAX", f"{lo} {hi}")
+        if self.of is None:
+            return self
+        if (self.tilt, self.height, self.min_area) != (Survey("").tilt, Survey("").height, 0.0):
+            raise InvalidParameterError(
+                "--of", "not combined with --tilt, --height or --min-area", self.of
+            )
+        cls = class_of(self.of, ontology)
+        names = [p.name for p in cls.parts]
+        if self.scope != "cluster" and (
+            not self.parts
+            or len(self.parts) != (2 if self.scope == "relation" else 1)
+            or any(p not in names for p in self.parts)
+        ):
+            form = "A~B.feature" if self.scope == "relation" else "PART.feature"
+            raise InvalidParameterError(
+                "--feature", f"{form} with parts of {self.of} ({', '.join(names)})", self.feature
+            )
         return self
+
+
+def class_of(name: str, ontology: Any = None) -> Any:
+    """The class ``name`` of ``ontology`` (the built-in one by default), or
+    InvalidParameterError naming the classes there are."""
+    from ontodetect.ontology import builtin_ontology
+
+    rules = ontology or builtin_ontology()
+    if name not in rules:
+        raise InvalidParameterError("--of", f"a class ({', '.join(rules.names)})", name)
+    return rules[name]
 
 
 def parse_bound(text: str | None) -> tuple[float, float] | None:
@@ -149,11 +214,21 @@ def cluster_names(source: SceneSource, cloud: Any, seg: Any) -> list[tuple[str, 
     return out
 
 
-def survey_values(desc: Any, survey: Survey) -> list[tuple[int | None, float]]:
+def survey_values(desc: Any, survey: Survey, cls: Any = None) -> list[tuple[int | None, float]]:
     """(plane index or None, value) of one cluster description: every plane that passes
-    the survey's filters for a part feature, the cluster itself for a cluster feature."""
+    the survey's filters for a part feature, the cluster itself for a cluster feature;
+    with ``survey.of``, the plane the class ``cls`` gives the part (None and NaN where it
+    gives none) or the relation between its two parts' planes (index None)."""
     if survey.scope == "cluster":
         return [(None, float(FEATURES["cluster"][survey.name].cluster(desc)))]
+    if survey.of is not None:
+        assignment = score_class(cls, desc).assignment
+        planes = [assignment[p] for p in survey.parts]
+        if any(i is None for i in planes):
+            return [(None, math.nan)]
+        if survey.scope == "relation":
+            return [(None, float(FEATURES["relation"][survey.name].relation(desc, *planes)))]
+        return [(planes[0], float(part_values(desc, survey.name)[planes[0]]))]
     values = part_values(desc, survey.name)
     out = []
     for i, plane in enumerate(desc.planes):
@@ -167,20 +242,29 @@ def survey_values(desc: Any, survey: Survey) -> list[tuple[int | None, float]]:
 
 
 def measure_scan(
-    source: SceneSource, survey: Survey, overrides: Sequence[str] = ()
+    source: SceneSource,
+    survey: Survey,
+    overrides: Sequence[str] = (),
+    ontology: tuple[tuple[str, ...], bool] = ((), False),
 ) -> list[dict[str, Any]]:
-    """Every value of the survey on one labelled scan (a unit of work for ``map_scenes``)."""
+    """Every value of the survey on one labelled scan (a unit of work for ``map_scenes``);
+    ``ontology``: files and whether they replace the built-in ontology (``--ontology``,
+    ``--ontology-only``), which segments the scan and holds ``survey.of``."""
+    from ontodetect.ontology import builtin_ontology, load_ontology
     from ontodetect.segment import describe_clusters, segment
 
+    files, only = ontology
+    rules = load_ontology(*files, replace=only) if files else builtin_ontology()
+    cls = class_of(survey.of, rules) if survey.of is not None else None
     config = Config().with_overrides(list(overrides))
     cloud = load_scene(source).cloud
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DataWarning)
-        seg = segment(cloud, config)
+        seg = segment(cloud, config, ontology=rules)
         descs = describe_clusters(seg, sensor_position(cloud))
     rows = []
     for k, ((name, share), desc) in enumerate(zip(cluster_names(source, cloud, seg), descs)):
-        for plane, value in survey_values(desc, survey):
+        for plane, value in survey_values(desc, survey, cls):
             rows.append(
                 {
                     "scene": source.name,
@@ -197,7 +281,7 @@ def measure_scan(
 def summarize(
     rows: Sequence[Mapping[str, Any]], bound: tuple[float, float] | None = None
 ) -> dict[str, dict[str, Any]]:
-    """Per kind (most values first): how many values, how many not measured, their
+    """Per kind (most measured values first): how many values, how many not measured, their
     quantiles (:data:`QUANTILES`) and, with ``bound``, how many lie inside it.
 
     >>> rows = [{"kind": "desk", "value": v} for v in (0.0, 0.1, 0.5)] + [
@@ -210,7 +294,8 @@ def summarize(
     for r in rows:
         by.setdefault(str(r["kind"]), []).append(math.nan if r["value"] is None else r["value"])
     out = {}
-    for kind, values in sorted(by.items(), key=lambda kv: (-len(kv[1]), kv[0])):
+    measured = {k: sum(not math.isnan(x) for x in v) for k, v in by.items()}
+    for kind, values in sorted(by.items(), key=lambda kv: (-measured[kv[0]], -len(kv[1]), kv[0])):
         v = np.asarray(values, dtype=np.float64)
         known = v[~np.isnan(v)]
         out[kind] = {
@@ -264,7 +349,12 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(
         prog="python -m benchmarks features", description=__doc__.splitlines()[0]
     )
-    ap.add_argument("--feature", required=True, help="a part feature, or cluster.<name>")
+    ap.add_argument(
+        "--feature",
+        required=True,
+        help="a part feature, or cluster.<name>; with --of, <part>.<name> or <a>~<b>.<name>",
+    )
+    ap.add_argument("--of", metavar="CLASS", help="read it on this class's best assignment")
     ap.add_argument("--sim-set", type=Path, help="a simulated set written by the benchmark")
     ap.add_argument("--real", type=Path, help="labelled real scans (ScanNet, VoteNet layout)")
     ap.add_argument("--tilt", type=float, nargs=2, default=(0.0, 90.0), metavar=("MIN", "MAX"))
@@ -282,17 +372,27 @@ def main(argv: list[str] | None = None) -> int:
         metavar="KEY=VALUE",
         help="a configuration override, as ontodetect detect --set takes it (repeatable)",
     )
+    ap.add_argument(
+        "--ontology", type=Path, action="append", default=[], help="merge this ontology file in"
+    )
+    ap.add_argument("--ontology-only", action="store_true", help="use the --ontology files alone")
     ap.add_argument("--jobs", type=int, default=2, help="worker processes (0: one per CPU)")
     ap.add_argument("--jsonl", type=Path, help="write every value to this file")
     args = ap.parse_args(argv)
     try:
-        survey = Survey(args.feature, tuple(args.tilt), tuple(args.height), args.min_area).check()
+        from benchmarks.bench_generalization import _ontology_option
+
+        rules = _ontology_option(args.ontology, args.ontology_only)
+        survey = Survey(
+            args.feature, tuple(args.tilt), tuple(args.height), args.min_area, args.of
+        ).check(rules)
         bound = parse_bound(args.bound)
         Config().with_overrides(args.overrides)
         if args.sim_set is None and args.real is None:
             raise InvalidParameterError("--sim-set", "a simulated set, --real, or both", None)
         sources = scan_sources(args.sim_set, args.real)
-        units = [(s, survey, tuple(args.overrides)) for s in sources]
+        ontology = (tuple(str(f) for f in args.ontology), args.ontology_only)
+        units = [(s, survey, tuple(args.overrides), ontology) for s in sources]
         runs = map_scenes(_unit, units, jobs=args.jobs, description="Measuring clusters")
     except OntoDetectError as exc:
         print(f"error: {exc}", file=sys.stderr)
@@ -303,14 +403,14 @@ def main(argv: list[str] | None = None) -> int:
         rows = [r for r in rows if r["kind"] in keep]
     if args.jsonl is not None:
         args.jsonl.write_text("".join(json.dumps(r) + "\n" for r in rows))
-    title = f"{survey.feature} on {len(sources)} scans, by what the cluster really is"
+    of = f" of {survey.of}" if survey.of is not None else ""
+    title = f"{survey.feature}{of} on {len(sources)} scans, by what the cluster really is"
     Console().print(summary_table(title, summarize(rows, bound), bound))
     return 0
 
 
-def _unit(unit: tuple[SceneSource, Survey, tuple[str, ...]]) -> list[dict[str, Any]]:
-    source, survey, overrides = unit
-    return measure_scan(source, survey, overrides)
+def _unit(unit: tuple[Any, ...]) -> list[dict[str, Any]]:
+    return measure_scan(*unit)
 
 
 if __name__ == "__main__":
