@@ -52,6 +52,12 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 
+from benchmarks.bench_generalization import (
+    _ontology_option,
+    add_rule_options,
+    manifest_scans,
+    scene_labels,
+)
 from ontodetect.cloud import DataWarning, sensor_position
 from ontodetect.config import Config
 from ontodetect.errors import InvalidParameterError, OntoDetectError
@@ -197,8 +203,6 @@ def cluster_names(source: SceneSource, cloud: Any, seg: Any) -> list[tuple[str, 
     """What each cluster of ``seg`` really is, by the labelled object holding most of its
     points (the kind in a simulated set, the class in a real one), and that object's share
     of the cluster's points."""
-    from benchmarks.bench_generalization import scene_labels
-
     instance, what = scene_labels(source)
     rows = np.arange(len(cloud)) if cloud.index is None else np.asarray(cloud.index)
     out = []
@@ -330,8 +334,6 @@ def summary_table(
 
 def scan_sources(sim_set: Path | None, real: Path | None) -> list[SceneSource]:
     """The labelled scans of a simulated set (its manifest's scans) and of a real folder."""
-    from benchmarks.bench_generalization import manifest_scans
-
     sources = []
     if sim_set is not None:
         names = sorted(manifest_scans(sim_set))
@@ -364,25 +366,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--min-area", type=float, default=0.0, help="smallest plane (m²)")
     ap.add_argument("--bound", help="count the values inside min=A, max=B or min=A,max=B")
     ap.add_argument("--kinds", help="only these kinds, comma-separated")
-    ap.add_argument(
-        "--set",
-        dest="overrides",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="a configuration override, as ontodetect detect --set takes it (repeatable)",
-    )
-    ap.add_argument(
-        "--ontology", type=Path, action="append", default=[], help="merge this ontology file in"
-    )
-    ap.add_argument("--ontology-only", action="store_true", help="use the --ontology files alone")
+    add_rule_options(ap)
     ap.add_argument("--jobs", type=int, default=2, help="worker processes (0: one per CPU)")
     ap.add_argument("--jsonl", type=Path, help="write every value to this file")
     args = ap.parse_args(argv)
     try:
-        from benchmarks.bench_generalization import _ontology_option
-
-        rules = _ontology_option(args.ontology, args.ontology_only)
+        rules = _ontology_option(args.ontologies, args.ontology_only)
         survey = Survey(
             args.feature, tuple(args.tilt), tuple(args.height), args.min_area, args.of
         ).check(rules)
@@ -391,7 +380,7 @@ def main(argv: list[str] | None = None) -> int:
         if args.sim_set is None and args.real is None:
             raise InvalidParameterError("--sim-set", "a simulated set, --real, or both", None)
         sources = scan_sources(args.sim_set, args.real)
-        ontology = (tuple(str(f) for f in args.ontology), args.ontology_only)
+        ontology = (tuple(str(f) for f in args.ontologies), args.ontology_only)
         units = [(s, survey, tuple(args.overrides), ontology) for s in sources]
         runs = map_scenes(_unit, units, jobs=args.jobs, description="Measuring clusters")
     except OntoDetectError as exc:

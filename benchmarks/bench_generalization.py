@@ -1063,29 +1063,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--jobs", type=int, default=2, help="worker processes (0: one per CPU)")
     ap.add_argument("--quick", action="store_true", help="a small smoke run")
     ap.add_argument("--seed", type=int, default=0, help="seed of detection (default 0)")
-    ap.add_argument(
-        "--set",
-        dest="overrides",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="a configuration value for detection, e.g. detect.proposals=recognition (repeatable)",
-    )
-    ap.add_argument(
-        "--ontology",
-        dest="ontologies",
-        action="append",
-        default=[],
-        type=Path,
-        metavar="FILE",
-        help="an ontology YAML merged into the built-in one, as `ontodetect detect --ontology` "
-        "takes it (repeatable): an edited class measured before it is built in",
-    )
-    ap.add_argument(
-        "--ontology-only",
-        action="store_true",
-        help="use only the --ontology files, not the built-in ontology (an edited copy of it)",
-    )
+    add_rule_options(ap)
     ap.add_argument(
         "--room",
         default="auto",
@@ -1186,6 +1164,35 @@ def main(argv: list[str] | None = None) -> int:
     except OntoDetectError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+
+
+def add_rule_options(ap: argparse.ArgumentParser) -> None:
+    """``--set`` (``overrides``), ``--ontology`` (``ontologies``) and ``--ontology-only``:
+    the configuration and the rules a benchmark runs the detector with, as ``ontodetect
+    detect`` takes them."""
+    ap.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="a configuration value for detection, e.g. detect.proposals=recognition (repeatable)",
+    )
+    ap.add_argument(
+        "--ontology",
+        dest="ontologies",
+        action="append",
+        default=[],
+        type=Path,
+        metavar="FILE",
+        help="an ontology YAML merged into the built-in one, as `ontodetect detect --ontology` "
+        "takes it (repeatable): an edited class measured before it is built in",
+    )
+    ap.add_argument(
+        "--ontology-only",
+        action="store_true",
+        help="use only the --ontology files, not the built-in ontology (an edited copy of it)",
+    )
 
 
 def _ontology_option(files: Sequence[Path], only: bool) -> Any:
