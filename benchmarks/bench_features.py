@@ -77,6 +77,9 @@ CLUSTER_PREFIX = "cluster."
 QUANTILES = (0.0, 0.1, 0.5, 0.9, 1.0)
 #: What a cluster of unlabelled points is called.
 NOTHING = "nothing"
+#: The plane filters that let every plane through.
+ALL_TILTS = (0.0, 90.0)
+ALL_HEIGHTS = (-math.inf, math.inf)
 
 
 @dataclass(frozen=True)
@@ -100,8 +103,8 @@ class Survey:
     """
 
     feature: str
-    tilt: tuple[float, float] = (0.0, 90.0)
-    height: tuple[float, float] = (-math.inf, math.inf)
+    tilt: tuple[float, float] = ALL_TILTS
+    height: tuple[float, float] = ALL_HEIGHTS
     min_area: float = 0.0
     of: str | None = None
 
@@ -144,7 +147,7 @@ class Survey:
                 raise InvalidParameterError(option, "MIN MAX with MIN <= MAX", f"{lo} {hi}")
         if self.of is None:
             return self
-        if (self.tilt, self.height, self.min_area) != (Survey("").tilt, Survey("").height, 0.0):
+        if (self.tilt, self.height, self.min_area) != (ALL_TILTS, ALL_HEIGHTS, 0.0):
             raise InvalidParameterError(
                 "--of", "not combined with --tilt, --height or --min-area", self.of
             )
@@ -359,10 +362,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--of", metavar="CLASS", help="read it on this class's best assignment")
     ap.add_argument("--sim-set", type=Path, help="a simulated set written by the benchmark")
     ap.add_argument("--real", type=Path, help="labelled real scans (ScanNet, VoteNet layout)")
-    ap.add_argument("--tilt", type=float, nargs=2, default=(0.0, 90.0), metavar=("MIN", "MAX"))
-    ap.add_argument(
-        "--height", type=float, nargs=2, default=(-math.inf, math.inf), metavar=("MIN", "MAX")
-    )
+    ap.add_argument("--tilt", type=float, nargs=2, default=ALL_TILTS, metavar=("MIN", "MAX"))
+    ap.add_argument("--height", type=float, nargs=2, default=ALL_HEIGHTS, metavar=("MIN", "MAX"))
     ap.add_argument("--min-area", type=float, default=0.0, help="smallest plane (m²)")
     ap.add_argument("--bound", help="count the values inside min=A, max=B or min=A,max=B")
     ap.add_argument("--kinds", help="only these kinds, comma-separated")
