@@ -131,7 +131,7 @@ def reappearance(
     >>> reappearance(ref, new)
     (1, 2)
     """
-    total = len(list(reference))
+    total = len(reference)
     lost = lost_references(reference, other, iou_threshold=iou_threshold, kept=kept)
     return total - len(lost), total
 

@@ -206,7 +206,7 @@ def cluster_names(source: SceneSource, cloud: Any, seg: Any) -> list[tuple[str, 
     """What each cluster of ``seg`` really is, by the labelled object holding most of its
     points (the kind in a simulated set, the class in a real one), and that object's share
     of the cluster's points."""
-    instance, what = scene_labels(source)
+    instance, what = scene_labels(source, cloud)
     rows = np.arange(len(cloud)) if cloud.index is None else np.asarray(cloud.index)
     out = []
     for c in seg:

@@ -399,17 +399,20 @@ def grouped(outcomes: Sequence[SceneOutcome], group: Callable[[SceneOutcome], st
     return {g: per_class(rs) for g, rs in groups.items()}
 
 
-def scene_labels(source: SceneSource) -> tuple[np.ndarray, dict[int, tuple[str, str]]]:
-    """Instance id of every row, and instance id -> (class, kind), of a labelled scene."""
+def scene_labels(
+    source: SceneSource, cloud: Any = None
+) -> tuple[np.ndarray, dict[int, tuple[str, str]]]:
+    """Instance id of every row, and instance id -> (class, kind), of a labelled scene;
+    ``cloud``: the scan as :func:`load_scene` read it, when it is already in hand (a
+    simulated scan carries its objects there, ``meta["boxes"]``), else it is read."""
+    if cloud is None:
+        cloud = load_scene(source).cloud
     if source.format == "ontodetect":
-        from ontodetect.synth import load_synth
-
-        cloud, objects, _ = load_synth(source.path)
+        objects = cloud.meta["boxes"]
         what = {int(o["id"]): (str(o["class"]), str(o.get("kind") or o["class"])) for o in objects}
     else:
         from ontodetect.io._labels import NYU40_NAMES
 
-        cloud = load_scene(source).cloud
         what = instance_names(cloud.fields["instance"], cloud.fields["class_id"], NYU40_NAMES)
     return rows_to_values(cloud.index, cloud.fields["instance"]), what
 
@@ -619,7 +622,7 @@ def reference_kinds(source: SceneSource, cloud: Any, dets: Sequence[Instance]) -
     if "instance" not in cloud.fields or "class_id" not in cloud.fields:
         return ["?"] * len(dets)
     gts = labelled_objects(cloud)
-    rows, what = scene_labels(source)
+    rows, what = scene_labels(source, cloud)
     false = {
         f["id"]: f
         for f in false_detection_causes(dets, gts, rows, what, iou_threshold=THRESHOLDS["iou@0.25"])

@@ -116,11 +116,17 @@ def test_reference_kinds_tell_true_detections_from_what_false_ones_are(tmp_path)
         inst(2, "chair", np.flatnonzero(rows == wall["id"]), 0.5),  # a wall read as a chair
         inst(3, "table", np.flatnonzero(rows == chair["id"]), 0.4),  # the chair as a table
     ]
-    kinds = B.reference_kinds(source, load_scene(source).cloud, dets)
+    scan = load_scene(source).cloud
+    kinds = B.reference_kinds(source, scan, dets)
     assert kinds == ["chair", "false: wall", f"false: chair ({chair['kind']})"]
     # An unlabelled scan says nothing about them.
     bare = point_cloud(cloud.xyz)
     assert B.reference_kinds(source, bare, dets) == ["?", "?", "?"]
+    # The labels read from the scan in hand are those read from its files.
+    rows_read, what_read = B.scene_labels(source)
+    rows_held, what_held = B.scene_labels(source, scan)
+    np.testing.assert_array_equal(rows_held, rows_read)
+    assert what_held == what_read and what_read[chair["id"]] == ("chair", chair["kind"])
 
 
 def test_stability_transforms_keep_rows_and_do_what_they_say(rng):
