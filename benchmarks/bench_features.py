@@ -18,7 +18,10 @@ the filters (``--tilt``, ``--height`` above the floor, ``--min-area``); a cluste
 (``--feature cluster.height``) one value per cluster. The table gives, per kind, how many
 values there are, how many were not measured (NaN), their quantiles and, with ``--bound``,
 the share inside a bound (``min=0.35``, ``max=0.3``, or both). ``--jsonl FILE`` writes every
-value with its scan, cluster, kind and plane.
+value with its scan, cluster, kind and plane, and with what the ontology reads the cluster as
+on its own (``read_as``: its most probable class, or ``none``; one pass, no room prior, no
+vote). ``--read-as chair,easy_chair`` keeps only the clusters read as one of those classes:
+the ones a rule on them can take or give back.
 
 With ``--of CLASS`` the measure is read as that class's score reads it: on its best
 assignment of planes to parts in every cluster, ``<part>.<feature>`` on the plane it gives
@@ -34,6 +37,8 @@ Examples::
         --bound max=1.3 --kinds chair,table
     python -m benchmarks features --real path/to/scannet-dev --of chair \\
         --feature backrest~seat.behind --bound max=-0.1
+    python -m benchmarks features --real path/to/scannet-dev --of chair \\
+        --feature seat~backrest.aside --read-as chair,easy_chair --bound max=0.25
 """
 
 from __future__ import annotations
@@ -69,6 +74,7 @@ from ontodetect.ontology import (
     RELATION_FEATURES,
     part_values,
     score_class,
+    score_cluster,
 )
 
 #: Prefix of a cluster feature's name on the command line (``cluster.height``).
@@ -271,6 +277,7 @@ def measure_scan(
         descs = describe_clusters(seg, sensor_position(cloud))
     rows = []
     for k, ((name, share), desc) in enumerate(zip(cluster_names(source, cloud, seg), descs)):
+        read_as = score_cluster(desc, rules).best
         for plane, value in survey_values(desc, survey, cls):
             rows.append(
                 {
@@ -279,10 +286,29 @@ def measure_scan(
                     "plane": plane,
                     "kind": name,
                     "share": round(share, 4),
+                    "read_as": read_as,
                     "value": None if math.isnan(value) else value,
                 }
             )
     return rows
+
+
+def read_as_option(text: str | None, ontology: Any = None) -> frozenset[str] | None:
+    """The classes of ``--read-as CLASS,...`` (``none`` too), checked against ``ontology``
+    (the built-in one by default); None when the option is not given.
+
+    >>> sorted(read_as_option("chair, none"))
+    ['chair', 'none']
+    """
+    if text is None:
+        return None
+    from ontodetect.ontology import builtin_ontology
+
+    names = set((ontology or builtin_ontology()).names) | {"none"}
+    wanted = frozenset(n.strip() for n in text.split(",") if n.strip())
+    if not wanted or not wanted <= names:
+        raise InvalidParameterError("--read-as", f"classes ({', '.join(sorted(names))})", text)
+    return wanted
 
 
 def summarize(
@@ -367,6 +393,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--min-area", type=float, default=0.0, help="smallest plane (m²)")
     ap.add_argument("--bound", help="count the values inside min=A, max=B or min=A,max=B")
     ap.add_argument("--kinds", help="only these kinds, comma-separated")
+    ap.add_argument(
+        "--read-as",
+        metavar="CLASSES",
+        help="only clusters the ontology reads as one of these classes (or none), on their own",
+    )
     add_rule_options(ap)
     ap.add_argument("--jobs", type=int, default=2, help="worker processes (0: one per CPU)")
     ap.add_argument("--jsonl", type=Path, help="write every value to this file")
@@ -377,6 +408,7 @@ def main(argv: list[str] | None = None) -> int:
             args.feature, tuple(args.tilt), tuple(args.height), args.min_area, args.of
         ).check(rules)
         bound = parse_bound(args.bound)
+        read_as = read_as_option(args.read_as, rules)
         Config().with_overrides(args.overrides)
         if args.sim_set is None and args.real is None:
             raise InvalidParameterError("--sim-set", "a simulated set, --real, or both", None)
@@ -391,10 +423,13 @@ def main(argv: list[str] | None = None) -> int:
     if args.kinds:
         keep = {k.strip() for k in args.kinds.split(",")}
         rows = [r for r in rows if r["kind"] in keep]
+    if read_as is not None:
+        rows = [r for r in rows if r["read_as"] in read_as]
     if args.jsonl is not None:
         args.jsonl.write_text("".join(json.dumps(r) + "\n" for r in rows))
     of = f" of {survey.of}" if survey.of is not None else ""
-    title = f"{survey.feature}{of} on {len(sources)} scans, by what the cluster really is"
+    seen = f", read as {args.read_as}" if read_as is not None else ""
+    title = f"{survey.feature}{of} on {len(sources)} scans{seen}, by what the cluster really is"
     Console().print(summary_table(title, summarize(rows, bound), bound))
     return 0
 

@@ -131,6 +131,26 @@ def test_a_class_is_read_on_its_own_best_assignment(dining_room):
     assert all(r["plane"] is None for r in seats if r["value"] is None)
 
 
+def test_each_cluster_says_what_the_ontology_reads_it_as(dining_room):
+    from ontodetect.ontology import builtin_ontology
+
+    rows = F.measure_scan(dining_room, F.Survey("cluster.height"))
+    assert {r["read_as"] for r in rows} <= set(builtin_ontology().names) | {"none"}
+    # The dining room's chairs, seen whole, are read as chairs; its walls as nothing.
+    chairs = [r for r in rows if r["kind"].startswith("chair") and r["share"] > 0.9]
+    assert sum(r["read_as"] in ("chair", "easy_chair") for r in chairs) >= 4
+    walls = [r for r in rows if r["kind"] == "wall" and r["share"] > 0.9]
+    assert not any(r["read_as"] in ("chair", "easy_chair") for r in walls)
+
+
+def test_read_as_takes_classes_of_the_ontology():
+    assert F.read_as_option(None) is None
+    assert F.read_as_option("chair,easy_chair") == {"chair", "easy_chair"}
+    for text in ("throne", "chair,throne", " , "):
+        with pytest.raises(InvalidParameterError, match="--read-as"):
+            F.read_as_option(text)
+
+
 def test_the_command_writes_every_value_and_refuses_bad_options(dining_room, tmp_path, capsys):
     with pytest.raises(InvalidParameterError, match="--sim-set"):
         F.scan_sources(tmp_path, None)  # no manifest
@@ -152,4 +172,11 @@ def test_the_command_writes_every_value_and_refuses_bad_options(dining_room, tmp
     assert "none.yaml" in capsys.readouterr().err
     assert F.main([*argv[:2], "--feature", "seat.tilt", "--of", "chair", "--jobs", "1"]) == 0
     assert "seat.tilt of chair on 1 scans" in capsys.readouterr().out
+    only = tmp_path / "chairs.jsonl"
+    assert F.main([*argv, "--read-as", "chair,easy_chair", "--jsonl", str(only)]) == 0
+    assert "read as chair,easy_chair" in capsys.readouterr().out
+    kept = [json.loads(line) for line in only.read_text().splitlines()]
+    assert kept == [r for r in rows if r["read_as"] in ("chair", "easy_chair")] and kept
+    assert F.main([*argv, "--read-as", "throne"]) == 2
+    assert "--read-as" in capsys.readouterr().err
     assert np.isfinite([r["value"] for r in rows]).all()
