@@ -70,10 +70,10 @@ from ontodetect.evaluation import SceneSource, discover_scenes, load_scene, map_
 from ontodetect.ontology import (
     CLUSTER_FEATURES,
     FEATURES,
+    NONE,
     PART_FEATURES,
     RELATION_FEATURES,
     part_values,
-    score_class,
     score_cluster,
 )
 
@@ -227,16 +227,18 @@ def cluster_names(source: SceneSource, cloud: Any, seg: Any) -> list[tuple[str, 
     return out
 
 
-def survey_values(desc: Any, survey: Survey, cls: Any = None) -> list[tuple[int | None, float]]:
+def survey_values(
+    desc: Any, survey: Survey, assignment: Mapping[str, int | None] | None = None
+) -> list[tuple[int | None, float]]:
     """(plane index or None, value) of one cluster description: every plane that passes
     the survey's filters for a part feature, the cluster itself for a cluster feature;
-    with ``survey.of``, the plane the class ``cls`` gives the part (None and NaN where it
-    gives none) or the relation between its two parts' planes (index None)."""
+    with ``survey.of``, the plane the class's best ``assignment`` of planes to parts gives
+    the part (None and NaN where it gives none) or the relation between its two parts'
+    planes (index None)."""
     if survey.scope == "cluster":
         return [(None, float(FEATURES["cluster"][survey.name].cluster(desc)))]
     if survey.of is not None:
-        assignment = score_class(cls, desc).assignment
-        planes = [assignment[p] for p in survey.parts]
+        planes = [(assignment or {}).get(p) for p in survey.parts]
         if any(i is None for i in planes):
             return [(None, math.nan)]
         if survey.scope == "relation":
@@ -268,7 +270,8 @@ def measure_scan(
 
     files, only = ontology
     rules = load_ontology(*files, replace=only) if files else builtin_ontology()
-    cls = class_of(survey.of, rules) if survey.of is not None else None
+    if survey.of is not None:
+        class_of(survey.of, rules)
     config = Config().with_overrides(list(overrides))
     cloud = load_scene(source).cloud
     with warnings.catch_warnings():
@@ -277,8 +280,10 @@ def measure_scan(
         descs = describe_clusters(seg, sensor_position(cloud))
     rows = []
     for k, ((name, share), desc) in enumerate(zip(cluster_names(source, cloud, seg), descs)):
-        read_as = score_cluster(desc, rules).best
-        for plane, value in survey_values(desc, survey, cls):
+        # Every class scored once: what the cluster is read as, and the assignment ``of`` reads.
+        scores = score_cluster(desc, rules)
+        assignment = scores.classes[survey.of].assignment if survey.of is not None else None
+        for plane, value in survey_values(desc, survey, assignment):
             rows.append(
                 {
                     "scene": source.name,
@@ -286,7 +291,7 @@ def measure_scan(
                     "plane": plane,
                     "kind": name,
                     "share": round(share, 4),
-                    "read_as": read_as,
+                    "read_as": scores.best,
                     "value": None if math.isnan(value) else value,
                 }
             )
@@ -304,7 +309,7 @@ def read_as_option(text: str | None, ontology: Any = None) -> frozenset[str] | N
         return None
     from ontodetect.ontology import builtin_ontology
 
-    names = set((ontology or builtin_ontology()).names) | {"none"}
+    names = set((ontology or builtin_ontology()).names) | {NONE}
     wanted = frozenset(n.strip() for n in text.split(",") if n.strip())
     if not wanted or not wanted <= names:
         raise InvalidParameterError("--read-as", f"classes ({', '.join(sorted(names))})", text)
