@@ -228,6 +228,42 @@ def test_a_cluster_narrower_than_a_seat_is_a_poor_chair():
     assert length_factor(0.15) < 0.7 * length_factor(0.45)
 
 
+@dataclass(frozen=True)
+class Facing(P):  # an upright plane facing along +y (a backrest behind its seat)
+    @property
+    def normal(self):
+        t = math.radians(self.tilt)
+        return np.array([0.0, math.sin(t), math.cos(t)])
+
+
+@pytest.mark.parametrize("name", ["chair", "easy_chair"])
+def test_a_chairs_backrest_is_centred_on_its_seat(name):
+    # A chair is symmetric about the vertical plane through the middle of its seat and back
+    # (EN 1335-1, EN 1728): its back's centroid lies over the seat's middle, within half a
+    # seat's width for a back seen in part. A lamp standing at the side of a bedside
+    # table's top, taken as a backrest, does not.
+    cls = builtin_ontology()[name]
+    seat = P(tilt=2, height=0.42, length=0.5, width=0.5)
+
+    def scored(offset):
+        back = Facing(tilt=80, height=0.72, length=0.45, width=0.4, cx=offset, cy=0.25)
+        desc = cluster([seat, back], {(0, 1): R(angle=80, distance=0.02)}, length=0.7)
+        s = score_class(cls, desc)
+        aside = [c for c in s.constraints if c.part == "seat~backrest" and c.feature == "aside"]
+        return s, aside
+
+    for offset in (0.0, 0.2):  # centred, or a back seen in part: the rule costs nothing
+        s, (c,) = scored(offset)
+        assert s.assignment["backrest"] == 1
+        assert (c.value, c.factor) == (pytest.approx(offset), 1.0)
+    centred = scored(0.0)[0].log_likelihood
+    assert scored(0.2)[0].log_likelihood == pytest.approx(centred)
+    # 0.4 m aside it is no backrest: the chair's back is then missing, and costs as much.
+    lamp, _ = scored(0.4)
+    assert lamp.assignment["backrest"] is None
+    assert lamp.log_likelihood <= centred + math.log(0.2)
+
+
 def test_height_cut_at_the_search_volume_counts_as_at_least_that_tall():
     # Seat and backrest planes on a cluster that reaches the altitude cut-off: a cabinet
     # or a shelf cut at 1.4 m, whose true top is higher; chairs are never that tall.
