@@ -403,12 +403,13 @@ def scene_labels(
     source: SceneSource, cloud: Any = None
 ) -> tuple[np.ndarray, dict[int, tuple[str, str]]]:
     """Instance id of every row, and instance id -> (class, kind), of a labelled scene;
-    ``cloud``: the scan as :func:`load_scene` read it, when it is already in hand (a
-    simulated scan carries its objects there, ``meta["boxes"]``), else it is read."""
+    ``cloud``: the scan as :func:`load_scene` read it, or a changed copy that keeps its
+    labelled rows, when it is already in hand (a simulated scan carries its objects there,
+    ``meta["boxes"]``; a copy made anew is read again for them), else it is read."""
     if cloud is None:
         cloud = load_scene(source).cloud
     if source.format == "ontodetect":
-        objects = cloud.meta["boxes"]
+        objects = cloud.meta.get("boxes") or load_scene(source).cloud.meta["boxes"]
         what = {int(o["id"]): (str(o["class"]), str(o.get("kind") or o["class"])) for o in objects}
     else:
         from ontodetect.io._labels import NYU40_NAMES
@@ -969,7 +970,8 @@ def robustness_unit(
     thr = THRESHOLDS["iou@0.25"]
     matched = match_instances(preds, gts, iou_threshold=thr).pred_match
     clusters = first_pass_clusters(result)
-    false, missed = scene_mistakes(source.name, preds, gts, clusters, scene_labels(source), thr)
+    labels = scene_labels(source, cloud)  # the changed copy: its rows, a doubled point's too
+    false, missed = scene_mistakes(source.name, preds, gts, clusters, labels, thr)
     counts = {
         c: [
             sum(1 for p, m in zip(preds, matched) if p.label == c and m >= 0),

@@ -235,6 +235,28 @@ def test_a_robustness_unit_scores_the_changed_scan_against_its_own_labels(tmp_pa
         assert {m["cause"] for m in run["missed"]} <= set(G.MISSED_CAUSES)
 
 
+def test_a_doubled_scans_copies_are_named_as_the_objects_they_copy(tmp_path, monkeypatch):
+    # What a false detection really is, on the doubled copy, is read off the copy's own rows:
+    # a point's copy is part of the same object, not "nothing" beyond the file's rows.
+    from ontodetect.evaluation import SceneSource, load_scene
+    from ontodetect.synth import synthesize, write_synth
+
+    write_synth(synthesize("office", "rgbd", seed=2, points=4_000), tmp_path / "room")
+    source = SceneSource("room", str(tmp_path / "room"), "ontodetect", "room")
+    cloud = load_scene(source).cloud
+    doubled = G.robustness_changes()["points doubled"](cloud, np.random.default_rng(0))
+    rows, what = B.scene_labels(source, doubled)
+    n = len(cloud)
+    assert len(rows) == 2 * n
+    np.testing.assert_array_equal(rows[n:], rows[:n])
+    assert what == B.scene_labels(source, cloud)[1]
+    seen = []
+    real = B.scene_labels
+    monkeypatch.setattr(B, "scene_labels", lambda s, c=None: seen.append(c) or real(s, c))
+    B.robustness_unit((source, "points doubled"), {"seed": 0, "room": None})
+    assert [len(c) for c in seen] == [2 * n]
+
+
 # -- false detections and families ---------------------------------------------------------
 def tiny_labelled_scan():
     """Rows 0-9 floor (instance 1), 10-19 wall (2), 20-29 chair (3), 30-39 sink (4),
