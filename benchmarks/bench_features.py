@@ -58,9 +58,9 @@ from rich.console import Console
 from rich.table import Table
 
 from benchmarks.bench_generalization import (
-    _ontology_option,
     add_rule_options,
     manifest_scans,
+    ontology_option,
     scene_labels,
 )
 from ontodetect.cloud import DataWarning, sensor_position
@@ -408,7 +408,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--jsonl", type=Path, help="write every value to this file")
     args = ap.parse_args(argv)
     try:
-        rules = _ontology_option(args.ontologies, args.ontology_only)
+        rules = ontology_option(args.ontologies, args.ontology_only)
         survey = Survey(
             args.feature, tuple(args.tilt), tuple(args.height), args.min_area, args.of
         ).check(rules)

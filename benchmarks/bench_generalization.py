@@ -1155,7 +1155,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.jobs < 0:
         ap.error(f"--jobs must be >= 0, got {args.jobs}")
     try:
-        args.ontology = _ontology_option(args.ontologies, args.ontology_only)
+        args.ontology = ontology_option(args.ontologies, args.ontology_only)
     except OntoDetectError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
@@ -1200,7 +1200,7 @@ def add_rule_options(ap: argparse.ArgumentParser) -> None:
     )
 
 
-def _ontology_option(files: Sequence[Path], only: bool) -> Any:
+def ontology_option(files: Sequence[Path], only: bool) -> Any:
     """``--ontology`` / ``--ontology-only`` as ``ontodetect detect`` reads them (None: the
     built-in ontology), checked before any scan is read."""
     if not files and not only:
