@@ -29,6 +29,12 @@ the part and ``<a>~<b>.<feature>`` (a relation feature, ``behind``, ``gap``...) 
 the planes of two parts, not measured where a part has no plane. ``--ontology`` and
 ``--ontology-only`` take ontology files as ``ontodetect detect`` does.
 
+``--separate KINDS`` ranks measures by what they set apart from those kinds (kind prefixes:
+``chair`` takes ``chair-office``): how many clusters of other kinds read outside the range
+the clusters of ``KINDS`` read, below and above (:func:`separation`). With ``--of CLASS
+--feature all`` every measure of the class's best assignment is read at once
+(:func:`assignment_values`), and only that ranking is shown.
+
 Examples::
 
     python -m benchmarks features --sim-set bench-output/base5/sim-furnished-<digest> \\
@@ -39,6 +45,8 @@ Examples::
         --feature backrest~seat.behind --bound max=-0.1
     python -m benchmarks features --real path/to/scannet-dev --of chair \\
         --feature seat~backrest.aside --read-as chair,easy_chair --bound max=0.25
+    python -m benchmarks features --real path/to/scannet-dev --of chair --feature all \\
+        --read-as chair,easy_chair --separate chair,armchair,lounge-chair,recliner
 """
 
 from __future__ import annotations
@@ -48,6 +56,7 @@ import json
 import math
 import sys
 import warnings
+from collections import Counter
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -86,6 +95,10 @@ NOTHING = "nothing"
 #: The plane filters that let every plane through.
 ALL_TILTS = (0.0, 90.0)
 ALL_HEIGHTS = (-math.inf, math.inf)
+#: ``--feature all``: every feature of a class's best assignment (with ``--of``).
+ALL = "all"
+#: ``--separate``: a cluster counts for the kind holding at least this share of its points.
+SEPARATE_SHARE = 0.5
 
 
 @dataclass(frozen=True)
@@ -96,8 +109,9 @@ class Survey:
     ----------
     feature : str
         A part feature's name, or ``cluster.<name>`` for a cluster feature. With ``of``,
-        ``<part>.<name>`` (a part feature on the plane the class gives that part) or
-        ``<a>~<b>.<name>`` (a relation feature between the planes of parts a and b).
+        ``<part>.<name>`` (a part feature on the plane the class gives that part),
+        ``<a>~<b>.<name>`` (a relation feature between the planes of parts a and b), or
+        ``all``: every one of those and every cluster feature (:func:`assignment_values`).
     tilt, height : (float, float)
         Planes whose tilt (degrees) and height above the floor (m) lie in these closed
         ranges; part features without ``of`` only.
@@ -116,7 +130,9 @@ class Survey:
 
     @property
     def scope(self) -> str:
-        """``cluster``, ``part`` or ``relation``."""
+        """``cluster``, ``part``, ``relation`` or ``all``."""
+        if self.feature == ALL:
+            return ALL
         if self.feature.startswith(CLUSTER_PREFIX):
             return "cluster"
         return "relation" if self.of is not None and "~" in self.feature else "part"
@@ -131,13 +147,18 @@ class Survey:
     @property
     def parts(self) -> tuple[str, ...]:
         """With ``of``: the part, or the two parts of a relation, the feature is read on."""
-        if self.of is None or self.scope == "cluster":
+        if self.of is None or self.scope in ("cluster", ALL):
             return ()
         return tuple(self.feature.rpartition(".")[0].split("~"))
 
     def check(self, ontology: Any = None) -> Survey:
         """This survey, or InvalidParameterError naming what is wrong (``ontology``: the
         one ``of`` names a class of; the built-in one by default)."""
+        if self.scope == ALL:
+            if self.of is None:
+                raise InvalidParameterError("--feature", "all with --of CLASS", self.feature)
+            class_of(self.of, ontology)
+            return self
         known = {"cluster": CLUSTER_FEATURES, "part": PART_FEATURES}.get(
             self.scope, RELATION_FEATURES
         )
@@ -256,6 +277,28 @@ def survey_values(
     return out
 
 
+def assignment_values(desc: Any, assignment: Mapping[str, int | None]) -> dict[str, float]:
+    """Every feature a class's best ``assignment`` of planes to parts gives one cluster,
+    named as ``--feature`` names them: ``<part>.<name>`` for each part with a plane,
+    ``<a>~<b>.<name>`` for each ordered pair of them (a relation may read differently
+    from b, ``behind``), and ``cluster.<name>``; NaN where a measure is not taken."""
+    out: dict[str, float] = {}
+    planes = {part: i for part, i in assignment.items() if i is not None}
+    for name in PART_FEATURES:
+        values = part_values(desc, name)  # every plane's, once
+        for part, i in planes.items():
+            out[f"{part}.{name}"] = float(values[i])
+    for a, i in planes.items():
+        for b, j in planes.items():
+            if a != b:
+                for name in RELATION_FEATURES:
+                    value = FEATURES["relation"][name].relation(desc, i, j)
+                    out[f"{a}~{b}.{name}"] = float(value)
+    for name in CLUSTER_FEATURES:
+        out[CLUSTER_PREFIX + name] = float(FEATURES["cluster"][name].cluster(desc))
+    return out
+
+
 def measure_scan(
     source: SceneSource,
     survey: Survey,
@@ -283,11 +326,17 @@ def measure_scan(
         # Every class scored once: what the cluster is read as, and the assignment ``of`` reads.
         scores = score_cluster(desc, rules)
         assignment = scores.classes[survey.of].assignment if survey.of is not None else None
-        for plane, value in survey_values(desc, survey, assignment):
+        if survey.scope == ALL:
+            assert assignment is not None  # checked: all needs of
+            values = [(f, None, v) for f, v in assignment_values(desc, assignment).items()]
+        else:
+            values = [(survey.feature, i, v) for i, v in survey_values(desc, survey, assignment)]
+        for feature, plane, value in values:
             rows.append(
                 {
                     "scene": source.name,
                     "cluster": k,
+                    "feature": feature,
                     "plane": plane,
                     "kind": name,
                     "share": round(share, 4),
@@ -366,6 +415,69 @@ def summary_table(
     return table
 
 
+def separation(rows: Sequence[Mapping[str, Any]], kinds: Sequence[str]) -> list[dict[str, Any]]:
+    """Per feature, how the clusters of other kinds fall against the range the clusters of
+    ``kinds`` (kind prefixes: ``chair`` takes ``chair-office``) read: the values of those
+    outside it, below and above, worst first. A bound at the edge of the range would take
+    away exactly those and keep every cluster of ``kinds``; a feature no cluster of
+    ``kinds`` measures is left out. A cluster counts for the kind holding at least
+    :data:`SEPARATE_SHARE` of its points, and not at all below that.
+
+    >>> rows = [{"feature": "h", "kind": k, "share": 1.0, "value": v}
+    ...         for k, v in [("chair-a", 0.4), ("chair-b", 0.5), ("wc", 0.3), ("desk", 0.7)]]
+    >>> [(s["feature"], s["range"], s["below"], s["above"]) for s in separation(rows, ["chair"])]
+    [('h', (0.4, 0.5), [(0.3, 'wc')], [(0.7, 'desk')])]
+    """
+    kept: dict[str, list[float]] = {}
+    other: dict[str, list[tuple[float, str]]] = {}
+    for r in rows:
+        if r["value"] is None or r["share"] < SEPARATE_SHARE:
+            continue
+        kind = str(r["kind"])
+        if any(kind.startswith(k) for k in kinds):
+            kept.setdefault(r["feature"], []).append(float(r["value"]))
+        else:
+            other.setdefault(r["feature"], []).append((float(r["value"]), kind))
+    out = []
+    for feature, values in kept.items():
+        lo, hi = min(values), max(values)
+        rest = sorted(other.get(feature, []))
+        out.append(
+            {
+                "feature": feature,
+                "range": (lo, hi),
+                "kept": len(values),
+                "others": len(rest),
+                "below": [x for x in rest if x[0] < lo],
+                "above": [x for x in rest if x[0] > hi],
+            }
+        )
+    out.sort(key=lambda s: (-(len(s["below"]) + len(s["above"])), s["feature"]))
+    return out
+
+
+def separation_table(title: str, rows: Sequence[Mapping[str, Any]], top: int) -> Table:
+    """The ``top`` features of :func:`separation` that set most clusters apart."""
+    table = Table(title=title)
+    table.add_column("feature", no_wrap=True)
+    for name in ("kept", "range", "others", "below", "above"):
+        table.add_column(name, justify="right", no_wrap=True)
+    table.add_column("set apart (kind: count)")
+    for s in rows[:top]:
+        apart = Counter(kind for _, kind in s["below"] + s["above"])
+        lo, hi = s["range"]
+        table.add_row(
+            s["feature"],
+            str(s["kept"]),
+            f"{lo:.3g} – {hi:.3g}",
+            str(s["others"]),
+            str(len(s["below"])),
+            str(len(s["above"])),
+            ", ".join(f"{k}: {n}" for k, n in apart.most_common(6)),
+        )
+    return table
+
+
 def scan_sources(sim_set: Path | None, real: Path | None) -> list[SceneSource]:
     """The labelled scans of a simulated set (its manifest's scans) and of a real folder."""
     sources = []
@@ -388,7 +500,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument(
         "--feature",
         required=True,
-        help="a part feature, or cluster.<name>; with --of, <part>.<name> or <a>~<b>.<name>",
+        help="a part feature, or cluster.<name>; with --of, <part>.<name>, <a>~<b>.<name> or all",
     )
     ap.add_argument("--of", metavar="CLASS", help="read it on this class's best assignment")
     ap.add_argument("--sim-set", type=Path, help="a simulated set written by the benchmark")
@@ -403,6 +515,13 @@ def main(argv: list[str] | None = None) -> int:
         metavar="CLASSES",
         help="only clusters the ontology reads as one of these classes (or none), on their own",
     )
+    ap.add_argument(
+        "--separate",
+        metavar="KINDS",
+        help="rank the features by how many clusters of other kinds lie outside the range "
+        "these kinds read (kind prefixes, comma-separated: chair takes chair-office)",
+    )
+    ap.add_argument("--top", type=int, default=15, help="features --separate shows")
     add_rule_options(ap)
     ap.add_argument("--jobs", type=int, default=2, help="worker processes (0: one per CPU)")
     ap.add_argument("--jsonl", type=Path, help="write every value to this file")
@@ -414,6 +533,11 @@ def main(argv: list[str] | None = None) -> int:
         ).check(rules)
         bound = parse_bound(args.bound)
         read_as = read_as_option(args.read_as, rules)
+        separate = separate_option(args.separate)
+        if survey.scope == ALL and separate is None:
+            raise InvalidParameterError("--feature", "all with --separate KINDS", survey.feature)
+        if args.top < 1:
+            raise InvalidParameterError("--top", "an integer >= 1", args.top)
         Config().with_overrides(args.overrides)
         if args.sim_set is None and args.real is None:
             raise InvalidParameterError("--sim-set", "a simulated set, --real, or both", None)
@@ -434,9 +558,31 @@ def main(argv: list[str] | None = None) -> int:
         args.jsonl.write_text("".join(json.dumps(r) + "\n" for r in rows))
     of = f" of {survey.of}" if survey.of is not None else ""
     seen = f", read as {args.read_as}" if read_as is not None else ""
-    title = f"{survey.feature}{of} on {len(sources)} scans{seen}, by what the cluster really is"
-    Console().print(summary_table(title, summarize(rows, bound), bound))
+    console = Console()
+    if survey.scope != ALL:
+        title = f"{survey.feature}{of} on {len(sources)} scans{seen}, by what the cluster really is"
+        console.print(summary_table(title, summarize(rows, bound), bound))
+    if separate is not None:
+        title = (
+            f"features{of} on {len(sources)} scans{seen} that set other kinds apart from "
+            f"{', '.join(separate)}"
+        )
+        console.print(separation_table(title, separation(rows, separate), args.top))
     return 0
+
+
+def separate_option(text: str | None) -> tuple[str, ...] | None:
+    """The kind prefixes of ``--separate KIND,...``; None when the option is not given.
+
+    >>> separate_option("chair, armchair"), separate_option(None)
+    (('chair', 'armchair'), None)
+    """
+    if text is None:
+        return None
+    kinds = tuple(k.strip() for k in text.split(",") if k.strip())
+    if not kinds:
+        raise InvalidParameterError("--separate", "kinds, comma-separated", text)
+    return kinds
 
 
 def _unit(unit: tuple[Any, ...]) -> list[dict[str, Any]]:

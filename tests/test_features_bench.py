@@ -180,3 +180,71 @@ def test_the_command_writes_every_value_and_refuses_bad_options(dining_room, tmp
     assert F.main([*argv, "--read-as", "throne"]) == 2
     assert "--read-as" in capsys.readouterr().err
     assert np.isfinite([r["value"] for r in rows]).all()
+
+
+def test_every_feature_of_an_assignment_is_read_as_one_feature_reads_it(dining_room):
+    every = F.measure_scan(dining_room, F.Survey("all", of="chair"))
+    seats = F.measure_scan(dining_room, F.Survey("seat.height", of="chair"))
+    behind = F.measure_scan(dining_room, F.Survey("backrest~seat.behind", of="chair"))
+    cluster = F.measure_scan(dining_room, F.Survey("cluster.height", of="chair"))
+    for single in (seats, behind, cluster):
+        name = single[0]["feature"]
+        same = [(r["cluster"], r["value"]) for r in every if r["feature"] == name]
+        assert same == [(r["cluster"], r["value"]) for r in single if r["value"] is not None]
+    # A cluster with a seat and a backrest has both orders of their relation, every part
+    # feature of both and every cluster feature; one with neither has cluster features only.
+    by = {}
+    for r in every:
+        by.setdefault(r["cluster"], set()).add(r["feature"])
+    full = [names for names in by.values() if "seat~backrest.aside" in names]
+    assert full
+    for names in full:
+        assert {"backrest~seat.aside", "seat.height", "backrest.tilt", "cluster.rise"} <= names
+    assert all(r["plane"] is None for r in every)
+    with pytest.raises(InvalidParameterError, match="all with --of"):
+        F.Survey("all").check()
+    with pytest.raises(InvalidParameterError, match="--of"):
+        F.Survey("all", of="throne").check()
+
+
+def test_separation_ranks_the_features_by_what_lies_outside_the_kept_range():
+    def row(feature, kind, value, share=1.0):
+        return {"feature": feature, "kind": kind, "value": value, "share": share}
+
+    rows = [row("h", "chair-office", 0.45), row("h", "chair-dining", 0.5)]
+    rows += [row("h", "toilet", 0.41), row("h", "desk", 0.75), row("h", "desk", 0.46)]
+    rows += [row("w", "chair-office", 0.3), row("w", "chair-dining", 0.6)]
+    rows += [row("w", "toilet", 0.2), row("w", "desk", 0.1), row("w", "desk", 0.9)]
+    rows += [row("w", "desk", 5.0, share=0.4), row("w", "chair-x", 9.0, share=0.3)]
+    rows += [row("w", "chair-office", None), row("z", "desk", 1.0)]
+    out = F.separation(rows, ["chair"])
+    assert [s["feature"] for s in out] == ["w", "h"]  # three set apart, then two; z: no chair
+    w = out[0]
+    assert w["range"] == (0.3, 0.6) and (w["kept"], w["others"]) == (2, 3)
+    assert w["below"] == [(0.1, "desk"), (0.2, "toilet")] and w["above"] == [(0.9, "desk")]
+    assert out[1]["below"] == [(0.41, "toilet")] and out[1]["above"] == [(0.75, "desk")]
+    table = F.separation_table("t", out, top=1)
+    assert table.row_count == 1
+    assert F.separate_option(" chair ,armchair") == ("chair", "armchair")
+    with pytest.raises(InvalidParameterError, match="--separate"):
+        F.separate_option(" , ")
+
+
+def test_the_command_separates_kinds_on_every_feature(dining_room, tmp_path, capsys):
+    (tmp_path / "set").mkdir()
+    (tmp_path / "set" / "manifest.json").write_text(json.dumps({"key": {"scans": ["room"]}}))
+    (tmp_path / "set" / "room").symlink_to(dining_room.path, target_is_directory=True)
+    argv = ["--sim-set", str(tmp_path / "set"), "--jobs", "1", "--of", "chair"]
+    assert F.main([*argv, "--feature", "all", "--separate", "chair", "--top", "5"]) == 0
+    out = capsys.readouterr().out
+    assert "set other kinds apart from chair" in out and "really is" not in out
+    assert F.main([*argv, "--feature", "seat.height", "--separate", "chair"]) == 0
+    out = capsys.readouterr().out
+    assert "really is" in out and "apart from chair" in out
+    for bad, option in (
+        (["--feature", "all"], "--separate"),
+        (["--feature", "all", "--separate", ","], "--separate"),
+        (["--feature", "all", "--separate", "chair", "--top", "0"], "--top"),
+    ):
+        assert F.main([*argv, *bad]) == 2
+        assert option in capsys.readouterr().err
