@@ -347,6 +347,15 @@ def measure_scan(
     return rows
 
 
+def names_option(text: str) -> tuple[str, ...]:
+    """The names of a comma-separated option, stripped, empty ones left out.
+
+    >>> names_option(" chair, ,armchair")
+    ('chair', 'armchair')
+    """
+    return tuple(n.strip() for n in text.split(",") if n.strip())
+
+
 def read_as_option(text: str | None, ontology: Any = None) -> frozenset[str] | None:
     """The classes of ``--read-as CLASS,...`` (``none`` too), checked against ``ontology``
     (the built-in one by default); None when the option is not given.
@@ -359,7 +368,7 @@ def read_as_option(text: str | None, ontology: Any = None) -> frozenset[str] | N
     from ontodetect.ontology import builtin_ontology
 
     names = set((ontology or builtin_ontology()).names) | {NONE}
-    wanted = frozenset(n.strip() for n in text.split(",") if n.strip())
+    wanted = frozenset(names_option(text))
     if not wanted or not wanted <= names:
         raise InvalidParameterError("--read-as", f"classes ({', '.join(sorted(names))})", text)
     return wanted
@@ -550,7 +559,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     rows = [r for run in runs for r in run]
     if args.kinds:
-        keep = {k.strip() for k in args.kinds.split(",")}
+        keep = set(names_option(args.kinds))
         rows = [r for r in rows if r["kind"] in keep]
     if read_as is not None:
         rows = [r for r in rows if r["read_as"] in read_as]
@@ -579,7 +588,7 @@ def separate_option(text: str | None) -> tuple[str, ...] | None:
     """
     if text is None:
         return None
-    kinds = tuple(k.strip() for k in text.split(",") if k.strip())
+    kinds = names_option(text)
     if not kinds:
         raise InvalidParameterError("--separate", "kinds, comma-separated", text)
     return kinds
