@@ -313,8 +313,7 @@ def measure_scan(
 
     files, only = ontology
     rules = load_ontology(*files, replace=only) if files else builtin_ontology()
-    if survey.of is not None:
-        class_of(survey.of, rules)
+    survey.check(rules)  # the class ``of`` names is one of these rules'
     config = Config().with_overrides(list(overrides))
     cloud = load_scene(source).cloud
     with warnings.catch_warnings():
