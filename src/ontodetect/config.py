@@ -232,6 +232,16 @@ class PrepareConfig(_Section):
         "Prepare a scan (no sensor, z up, input frame) turned by the quarter turns its own "
         "points choose (the longer spread along x, the skewed side to +x).",
     )
+    # Any turn about z, not only a quarter: the scan is first turned so that its walls run
+    # along x and y (preprocess.wall_yaw, read to the rounding error), then by the quarter
+    # its points choose, moved to its lowest corner and read to the nanometre, so that the
+    # same scan turned by any angle or moved is the same input to the last bit.
+    walls_to_axes: bool = _param(
+        False,
+        Boolean(),
+        "Prepare a scan (no sensor, z up, input frame) turned so that its walls run along "
+        "x and y, then by the quarter turns its points choose (any turn gives one input).",
+    )
     # Reconstructions bend: real scanned floors rise 20 cm across a room. Heights are
     # measured above a floor height map with tiles of this size; 0 = one flat floor.
     floor_tile: float = _param(

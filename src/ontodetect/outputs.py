@@ -33,7 +33,7 @@ from .io import (
 )
 from .io._detections import write_detections
 from .pipeline import Result, detect
-from .preprocess import SurfaceMesh, scene_surface, turn_quarters
+from .preprocess import SurfaceMesh, scene_surface, turn_about_z, turn_quarters
 from .render import BoxDrawing, class_color, render_scene
 
 __all__ = [
@@ -257,16 +257,23 @@ def write_outputs(
 def _picture_frame(result: Result) -> tuple[np.ndarray, list[BoxDrawing]]:
     """The points and the detections' boxes as the picture draws them: in the levelled frame
     (z up, floor at 0), whatever the input's, turned back by the quarter turns the scan was
-    prepared in (``prepare.quarter_turns``), so that the top view keeps the file's heading."""
+    prepared in (``prepare.quarter_turns``) and the walls' turn (``prepare.walls_to_axes``),
+    so that the top view keeps the file's heading."""
     prepared = result.segmentation.prepared
     quarters = -int(prepared.info.get("quarter_turns", 0))
+    walls = float(prepared.info.get("walls_yaw", 0.0))  # prepare.walls_to_axes
+
+    def back(xyz: np.ndarray) -> np.ndarray:
+        turned = turn_quarters(xyz, quarters)
+        return turn_about_z(turned, walls) if walls else turned
+
     boxes = []
     for d in result.detections:
         box = result.segmentation[d.cluster].box
-        center = turn_quarters(np.asarray(box.center, dtype=np.float64), quarters)
-        yaw = float(box.yaw) + quarters * math.pi / 2
+        center = back(np.asarray(box.center, dtype=np.float64))
+        yaw = float(box.yaw) + quarters * math.pi / 2 + walls
         boxes.append(BoxDrawing(center, box.size, yaw, d.label, f"{d.score:.2f}"))
-    return turn_quarters(prepared.cloud.xyz, quarters), boxes
+    return back(prepared.cloud.xyz), boxes
 
 
 def _write_files(

@@ -54,7 +54,7 @@ from ._prepare import (
     scale_from_travel,
     surface_spacing,
 )
-from ._quarter import quarter_matrix, quarter_turns, turn_quarters
+from ._quarter import quarter_matrix, quarter_turns, turn_about_z, turn_quarters, wall_yaw
 from ._reconstruct import (
     MESH_METHODS,
     SENSOR_HEIGHT,
@@ -112,6 +112,8 @@ __all__ = [
     "statistical_outlier_mask",
     "surface_scatter",
     "surface_spacing",
+    "turn_about_z",
     "turn_quarters",
     "voxelize",
+    "wall_yaw",
 ]

@@ -41,7 +41,7 @@ from ._gravity import (
     find_floor,
     level_transform,
 )
-from ._quarter import quarter_matrix, quarter_turns, turn_quarters
+from ._quarter import quarter_matrix, quarter_turns, turn_about_z, turn_quarters, wall_yaw
 from ._structure import StructurePlane, find_structure
 from ._surface import smooth_surface, surface_scatter
 from ._voxel import VoxelGrid, voxelize
@@ -361,6 +361,11 @@ class Ground:
         turned by before the origin was subtracted (``prepare.quarter_turns``); 0 for most.
     snapped : bool
         Whether the (turned) input was rounded to :data:`SNAP` first (``prepare.quarter_turns``).
+    pre, yaw, corner : (3,) float, float or None, (3,) float
+        With ``prepare.walls_to_axes``: the whole-unit origin subtracted first, the walls'
+        direction (:func:`~ontodetect.preprocess.wall_yaw`, radians) the input was turned
+        back by before its quarter turns, and the lowest corner of the turned points then
+        subtracted (``origin`` is then zero). ``yaw`` is None otherwise.
     """
 
     num_points: int
@@ -378,18 +383,34 @@ class Ground:
     floor_scatter: float | None = None
     quarter: int = 0
     snapped: bool = False
+    pre: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
+    yaw: float | None = None
+    corner: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
 
     def to_local(self, xyz: ArrayLike) -> NDArray[np.float64]:
         """Input coordinates in the local frame all of the above are in."""
+        if self.yaw is not None:  # prepare.walls_to_axes, as find_ground turned them
+            local = np.asarray(xyz, dtype=np.float64)
+            local = local - self.pre if self.pre.any() else local
+            local = turn_quarters(turn_about_z(local, -self.yaw), self.quarter)
+            return _snap(local - self.corner)
         local = turn_quarters(xyz, self.quarter)
         if self.snapped:
             local = _snap(local)
         return local - self.origin if self.origin.any() else local
 
+    def walls_transform(self) -> NDArray[np.float64]:
+        """4x4 transform of :meth:`to_local` with ``prepare.walls_to_axes`` (without the
+        rounding): the input moved by ``pre``, turned by ``-yaw`` and its quarter turns,
+        then moved by ``corner``."""
+        turn = _rotation(quarter_matrix(self.quarter)) @ yaw_pose(0.0, 0.0, -(self.yaw or 0.0))
+        return _translation(-self.corner) @ turn @ _translation(-self.pre)
+
     @property
     def up(self) -> NDArray[np.float64]:
         """(3,) float: the floor's normal in the input frame (turned back by ``quarter``)."""
-        return np.array(turn_quarters(self.floor.normal, -self.quarter))
+        normal = np.array(turn_quarters(self.floor.normal, -self.quarter))
+        return turn_about_z(normal, self.yaw) if self.yaw is not None else normal
 
 
 @dataclass(frozen=True)
@@ -456,7 +477,27 @@ def find_ground(
     # A scan (no sensor, z up) is prepared in the quarter turn its own points choose, so
     # that the same scan turned by 90°, 180° or 270° is the same input to the last bit.
     quarter, snapped = 0, False
+    pre, yaw, corner = np.zeros(3), None, np.zeros(3)
     if (
+        cfg.walls_to_axes
+        and plane is None
+        and cfg.frame == "input"
+        and isinstance(up_choice, str)
+        and up_choice == "z"
+        and sensor_position(cloud) is None
+    ):
+        # Turned by its walls' direction and its quarter, moved to its lowest corner and
+        # read to the nanometre: the same scan turned by any angle, or moved, is the same
+        # input to the last bit (the turn is read to the rounding error, wall_yaw).
+        pre = local_origin(xyz)
+        local = xyz - pre if pre.any() else xyz
+        yaw = wall_yaw(local)
+        local = turn_about_z(local, -yaw)
+        quarter = quarter_turns(local)
+        local = turn_quarters(local, quarter)
+        corner = local.min(axis=0)
+        xyz, snapped = _snap(local - corner), True
+    elif (
         cfg.quarter_turns
         and plane is None
         and cfg.frame == "input"
@@ -472,6 +513,8 @@ def find_ground(
     # from it (voxels, cells) are then the same for the scan moved or turned by a quarter.
     canonical = cfg.frame == "canonical"
     origin = np.median(xyz, axis=0) if canonical else local_origin(xyz)
+    if yaw is not None:
+        origin = np.zeros(3)
     if origin.any():
         xyz = xyz - origin
     clock = _Clock()
@@ -572,6 +615,9 @@ def find_ground(
         floor_scatter,
         quarter,
         snapped,
+        pre,
+        yaw,
+        corner,
     )
 
 
@@ -718,7 +764,11 @@ def prepare(
         )
         cells = None
     clock.lap("level")
-    normals = None if cloud.normals is None else turn_quarters(cloud.normals, ground.quarter) @ R.T
+    normals = cloud.normals
+    if normals is not None:
+        if ground.yaw is not None:
+            normals = turn_about_z(normals, -ground.yaw)
+        normals = turn_quarters(normals, ground.quarter) @ R.T
     levelled = cloud.replace(xyz=levelled_xyz, normals=normals)
 
     clock.lap("levelled_cloud")
@@ -749,11 +799,15 @@ def prepare(
         object_mask &= centers[:, 2] >= cfg.floor_band
     clock.lap("structure")
     floor_z = float(floor.offset / k_s)
+    if ground.yaw is not None:
+        # Back to the input frame, as find_ground turned and moved it.
+        to_level = to_level @ ground.walls_transform()
+        floor_z += float(floor.normal @ ground.corner) + float(ground.up @ ground.pre)
     if origin.any():
         # Back to the input frame: levelling now subtracts the local origin first.
         to_level = to_level @ _translation(-origin)
         floor_z += float(floor.normal @ origin)
-    if ground.quarter:
+    if ground.quarter and ground.yaw is None:
         # ... and turns the input by its quarter turns before that.
         to_level = to_level @ _rotation(quarter_matrix(ground.quarter))
     return PreparedScene(
@@ -782,6 +836,8 @@ def prepare(
             "timings": clock.laps,
             # prepare.quarter_turns: the quarter turns the levelled frame is turned by
             **({"quarter_turns": ground.quarter} if ground.snapped else {}),
+            # prepare.walls_to_axes: the turn (radians) about z before the quarter turns
+            **({"walls_yaw": ground.yaw} if ground.yaw is not None else {}),
         },
     )
 

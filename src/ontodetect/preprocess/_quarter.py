@@ -16,10 +16,23 @@ decides with a margin, the scan keeps its own axes.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["QUARTER_RATIO", "QUARTER_SKEW", "quarter_matrix", "quarter_turns", "turn_quarters"]
+__all__ = [
+    "QUARTER_RATIO",
+    "QUARTER_SKEW",
+    "WALL_NEIGHBOURS",
+    "WALL_POINTS",
+    "WALL_QUERIES",
+    "quarter_matrix",
+    "quarter_turns",
+    "turn_about_z",
+    "turn_quarters",
+    "wall_yaw",
+]
 
 #: The longer horizontal spread (standard deviation of x or y) must exceed the shorter by
 #: this factor to decide which goes along x: an 80 % subsample of a real room moves the
@@ -77,6 +90,98 @@ def quarter_turns(xyz: ArrayLike) -> int:
         if turned[best][axis] >= QUARTER_SKEW and turned[best][axis] - max(others) >= QUARTER_SKEW:
             return best
     return 0
+
+
+#: Neighbours of each point whose scatter gives its surface's normal in :func:`wall_yaw`.
+WALL_NEIGHBOURS = 12
+#: :func:`wall_yaw` reads normals at about this many points of a scan ...
+WALL_QUERIES = 20_000
+#: ... among about this many (all of a smaller scan).
+WALL_POINTS = 400_000
+
+
+def _height_draw(z: NDArray[np.float64]) -> NDArray[np.float64]:
+    """A number in [0, 1) drawn from each point's height alone (a hash of its bits): a
+    turn about z, a move along x or y and a shuffle keep every point's draw, so a subset
+    taken by it is the same points."""
+    bits = np.ascontiguousarray(z + 0.0).view(np.uint64)  # + 0.0: -0.0 as 0.0
+    with np.errstate(over="ignore"):  # SplitMix64's finaliser, modulo 2**64
+        h = (bits ^ (bits >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+        h = (h ^ (h >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+        h = h ^ (h >> np.uint64(31))
+    return (h >> np.uint64(11)).astype(np.float64) / float(1 << 53)
+
+
+def wall_yaw(xyz: ArrayLike) -> float:
+    """The walls' direction about z (radians, in (-pi/4, pi/4]), read so that it turns
+    with the scan to the rounding error: a scan turned by ``a`` reads ``a`` more (mod 90°).
+
+    The normal at a point is the least direction of its :data:`WALL_NEIGHBOURS` nearest
+    neighbours' scatter, each weighed down smoothly to nothing at the farthest's distance
+    (a neighbourhood the turn does not change, whichever of equally far points it takes),
+    read at about :data:`WALL_QUERIES` points among about :data:`WALL_POINTS` (both drawn
+    by a hash of each point's height, which a turn about z does not change); the direction
+    is the
+    fourth circular moment of the normals' horizontal parts, ``arg Σ p_i h_i^4 / 4`` with
+    ``h_i = n_x + i n_y`` and ``p_i`` the neighbourhood's planarity ``(λ1 - λ0) / λ2``.
+    Every weight is a smooth function of what a turn about z keeps, so no point counts
+    or not by a threshold: an upright surface (``|h| = 1``) counts fully, a level one not
+    at all, and a wall and the wall across from it, or at a right angle to it, agree.
+    0 for fewer than :data:`WALL_NEIGHBOURS` points or no upright surface.
+
+    Examples
+    --------
+    >>> gen = np.random.default_rng(0)
+    >>> wall = np.c_[gen.uniform(0, 4, 3000), np.zeros(3000), gen.uniform(0, 2.5, 3000)]
+    >>> side = np.c_[np.zeros(2000), gen.uniform(0, 3, 2000), gen.uniform(0, 2.5, 2000)]
+    >>> room = np.vstack([wall, side])
+    >>> round(float(np.degrees(wall_yaw(room))), 2) + 0.0
+    0.0
+    >>> round(float(np.degrees(wall_yaw(turn_about_z(room, np.radians(20))))), 2)
+    20.0
+    """
+    from scipy.spatial import cKDTree  # lazy: only scans prepared in the walls' frame
+
+    pts = np.asarray(xyz, dtype=np.float64)
+    if len(pts) < WALL_NEIGHBOURS:
+        return 0.0
+    # Subsets drawn by height, so that a turned or moved copy draws the same points.
+    draw = _height_draw(pts[:, 2])
+    pts, draw = pts[draw < WALL_POINTS / len(pts)], draw[draw < WALL_POINTS / len(pts)]
+    queries = pts[draw < WALL_QUERIES / len(draw)] if len(draw) else pts
+    if len(pts) < WALL_NEIGHBOURS or not len(queries):
+        return 0.0
+    dist, idx = cKDTree(pts).query(queries, k=WALL_NEIGHBOURS, workers=-1)
+    # Each neighbour weighs less the further it is, nothing at the farthest's distance:
+    # which of several points at the same distance is taken last then does not matter (a
+    # scan on a grid has many such ties, and a turn breaks them another way).
+    with np.errstate(invalid="ignore", divide="ignore"):
+        w = np.nan_to_num(np.clip(1.0 - (dist / dist[:, -1:]) ** 2, 0.0, 1.0) ** 2, nan=1.0)
+    w /= w.sum(axis=1, keepdims=True)
+    near = pts[idx]
+    near = near - np.einsum("nk,nki->ni", w, near)[:, None, :]
+    lam, vec = np.linalg.eigh(np.einsum("nk,nki,nkj->nij", w, near, near))
+    lam = np.maximum(lam, 0.0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        planar = np.nan_to_num((lam[:, 1] - lam[:, 0]) / lam[:, 2])
+    terms = planar * (vec[:, 0, 0] + 1j * vec[:, 1, 0]) ** 4
+    # Summed exactly (math.fsum), so that the rows' order does not enter the last bits.
+    moment = complex(math.fsum(terms.real), math.fsum(terms.imag))
+    return float(np.angle(moment) / 4) if moment != 0 else 0.0
+
+
+def turn_about_z(xyz: ArrayLike, angle: float) -> NDArray[np.float64]:
+    """Points turned by ``angle`` (radians, counter-clockwise) about the z axis.
+
+    >>> turn_about_z([[1.0, 0.0, 2.0]], np.pi / 2).round(12).tolist()
+    [[0.0, 1.0, 2.0]]
+    """
+    pts = np.asarray(xyz, dtype=np.float64)
+    c, s = math.cos(angle), math.sin(angle)
+    out = pts.copy()
+    out[..., 0] = c * pts[..., 0] - s * pts[..., 1]
+    out[..., 1] = s * pts[..., 0] + c * pts[..., 1]
+    return out
 
 
 def quarter_matrix(k: int) -> NDArray[np.float64]:
