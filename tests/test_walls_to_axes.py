@@ -85,7 +85,8 @@ def test_a_turned_moved_and_shuffled_scan_is_the_same_input_to_the_last_bit(degr
 
 def test_the_levelling_transform_maps_the_input_and_the_floor_stays_in_the_input_frame():
     cloud = synthesize("tiny", seed=2).cloud
-    turned = turn_cloud(cloud, 31.0).replace(xyz=turn_cloud(cloud, 31.0).xyz + [250.0, 4.0, 0.3])
+    turned = turn_cloud(cloud, 31.0)
+    turned = turned.replace(xyz=turned.xyz + [250.0, 4.0, 0.3])
     scene = prepare(turned, WALLS)
     assert scene.info["walls_yaw"] != 0.0
     T = scene.to_level

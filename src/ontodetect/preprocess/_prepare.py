@@ -390,10 +390,7 @@ class Ground:
     def to_local(self, xyz: ArrayLike) -> NDArray[np.float64]:
         """Input coordinates in the local frame all of the above are in."""
         if self.yaw is not None:  # prepare.walls_to_axes, as find_ground turned them
-            local = np.asarray(xyz, dtype=np.float64)
-            local = local - self.pre if self.pre.any() else local
-            local = turn_quarters(turn_about_z(local, -self.yaw), self.quarter)
-            return _snap(local - self.corner)
+            return _snap(_walls_frame(xyz, self.pre, self.yaw, self.quarter, self.corner))
         local = turn_quarters(xyz, self.quarter)
         if self.snapped:
             local = _snap(local)
@@ -478,33 +475,25 @@ def find_ground(
     # that the same scan turned by 90°, 180° or 270° is the same input to the last bit.
     quarter, snapped = 0, False
     pre, yaw, corner = np.zeros(3), None, np.zeros(3)
-    if (
-        cfg.walls_to_axes
-        and plane is None
+    own_pose = (
+        plane is None
         and cfg.frame == "input"
         and isinstance(up_choice, str)
         and up_choice == "z"
         and sensor_position(cloud) is None
-    ):
+    )
+    if cfg.walls_to_axes and own_pose:
         # Turned by its walls' direction and its quarter, moved to its lowest corner and
         # read to the nanometre: the same scan turned by any angle, or moved, is the same
         # input to the last bit (the turn is read to the rounding error, wall_yaw).
         pre = local_origin(xyz)
         local = xyz - pre if pre.any() else xyz
         yaw = wall_yaw(local)
-        local = turn_about_z(local, -yaw)
-        quarter = quarter_turns(local)
-        local = turn_quarters(local, quarter)
-        corner = local.min(axis=0)
-        xyz, snapped = _snap(local - corner), True
-    elif (
-        cfg.quarter_turns
-        and plane is None
-        and cfg.frame == "input"
-        and isinstance(up_choice, str)
-        and up_choice == "z"
-        and sensor_position(cloud) is None
-    ):
+        quarter = quarter_turns(turn_about_z(local, -yaw))
+        turned = _walls_frame(xyz, pre, yaw, quarter, np.zeros(3))
+        corner = turned.min(axis=0)
+        xyz, snapped = _snap(turned - corner), True  # the bits Ground.to_local gives
+    elif cfg.quarter_turns and own_pose:
         # Read to the nanometre, so that a file turned by a rotation matrix (whose cos 90°
         # is 6e-17, not 0) is the same input as one turned exactly.
         quarter, snapped = quarter_turns(xyz), True
@@ -512,9 +501,8 @@ def find_ground(
     # The canonical frame works around the scan's median from the start: the grids laid
     # from it (voxels, cells) are then the same for the scan moved or turned by a quarter.
     canonical = cfg.frame == "canonical"
+    # (Zero after the walls' turn, which moved the scan to its lowest corner.)
     origin = np.median(xyz, axis=0) if canonical else local_origin(xyz)
-    if yaw is not None:
-        origin = np.zeros(3)
     if origin.any():
         xyz = xyz - origin
     clock = _Clock()
@@ -913,6 +901,17 @@ def canonical_pose(
 #: scanner's resolution, far above the rounding error a rotation leaves in a room's
 #: coordinates (1e-16 to 1e-10 of a unit).
 SNAP = 1e-9
+
+
+def _walls_frame(
+    xyz: ArrayLike, pre: NDArray[np.float64], yaw: float, quarter: int, corner: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Input points in the frame ``prepare.walls_to_axes`` prepares a scan in (before the
+    rounding): moved by ``-pre``, turned by ``-yaw`` and by ``quarter`` quarter turns, moved
+    by ``-corner``; :func:`find_ground` and :meth:`Ground.to_local` both read them so."""
+    local = np.asarray(xyz, dtype=np.float64)
+    local = local - pre if pre.any() else local
+    return turn_quarters(turn_about_z(local, -yaw), quarter) - corner
 
 
 def _snap(xyz: NDArray[np.float64]) -> NDArray[np.float64]:

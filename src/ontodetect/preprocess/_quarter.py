@@ -121,9 +121,9 @@ def wall_yaw(xyz: ArrayLike) -> float:
     (a neighbourhood the turn does not change, whichever of equally far points it takes),
     read at about :data:`WALL_QUERIES` points among about :data:`WALL_POINTS` (both drawn
     by a hash of each point's height, which a turn about z does not change); the direction
-    is the
-    fourth circular moment of the normals' horizontal parts, ``arg Σ p_i h_i^4 / 4`` with
-    ``h_i = n_x + i n_y`` and ``p_i`` the neighbourhood's planarity ``(λ1 - λ0) / λ2``.
+    is the fourth circular moment of the normals' horizontal parts, ``arg Σ p_i h_i^4 / 4``
+    with ``h_i = n_x + i n_y`` and ``p_i`` the neighbourhood's planarity
+    ``(λ1 - λ0) / λ2``.
     Every weight is a smooth function of what a turn about z keeps, so no point counts
     or not by a threshold: an upright surface (``|h| = 1``) counts fully, a level one not
     at all, and a wall and the wall across from it, or at a right angle to it, agree.
