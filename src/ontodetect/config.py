@@ -475,6 +475,15 @@ class PlaneConfig(_Section):
         "Offer the scoring each cluster's lying surfaces (level planes that meet, their "
         "centroids within 8 cm in height) as parts besides its planes.",
     )
+    # Issue 21's seats that are not planes: an upholstered or cane seat is level but not
+    # flat, and MSAC's best plane runs slanted through seat and backrest. Opt-in until the
+    # benchmark says it pays (docs/benchmarks.md, "A seat that faces up").
+    seat_layer: bool = _param(
+        False,
+        Boolean(),
+        "Offer the scoring each cluster's upward-facing level layer at seat height (30-75 "
+        "cm) where MSAC fitted no level plane there, for the parts that say 'layer'.",
+    )
 
 
 @dataclass(frozen=True)

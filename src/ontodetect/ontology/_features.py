@@ -35,6 +35,7 @@ __all__ = [
     "SCOPES",
     "Feature",
     "feature_registry",
+    "is_patch",
     "patch_members",
     "register_feature",
     "sigma_floor",
@@ -155,6 +156,12 @@ def sigma_floor(name: str) -> float:
 def patch_members(plane: Any) -> tuple[int, ...]:
     """The planes a curved patch (``segment.planes.Patch``) joins; ``()`` for a plane."""
     return tuple(getattr(plane, "members", ()))
+
+
+def is_patch(plane: Any) -> bool:
+    """Whether ``plane`` is a patch (``segment.planes.Patch``: a curved surface, a lying
+    surface, a seat's level layer) rather than one of the cluster's MSAC planes."""
+    return getattr(plane, "kind", None) is not None
 
 
 def _fill(plane: Any) -> float:
@@ -390,7 +397,7 @@ for _feature in (
     Feature("bottom", "cluster", "cluster", "lowest point above the floor (m)", 0.02,
             cluster=_attribute("bottom")),
     Feature("planes", "cluster", "cluster", "number of planes found in the cluster", 0.5,
-            cluster=lambda desc: float(sum(not patch_members(p) for p in desc.planes))),
+            cluster=lambda desc: float(sum(not is_patch(p) for p in desc.planes))),
     Feature("rise", "cluster", "cluster",
             "height of the cluster above its highest horizontal plane (m): a backrest rises "
             "above a seat, nothing rises above a cabinet top", 0.02,

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence, Set
 from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
@@ -92,6 +92,9 @@ class Part:
     #: It may take a lying surface (``planes.level_surfaces``: level pieces of one surface
     #: at one height, a made bed's duvet and pillows) as well as a plane.
     lying: bool = False
+    #: It may take a seat's level layer (``planes.seat_layer``: the upward-facing points at
+    #: seat height of a cushion MSAC did not fit as a plane) as well as a plane.
+    layer: bool = False
 
     @property
     def height_span(self) -> tuple[float, float] | None:
@@ -667,7 +670,7 @@ def _mapping(value: Any, path: tuple[Any, ...]) -> dict[str, Any]:
 
 
 def _constraints(
-    spec: dict[str, Any], allowed: Mapping[str, str], path: tuple[Any, ...], skip: set[str]
+    spec: dict[str, Any], allowed: Mapping[str, str], path: tuple[Any, ...], skip: Set[str]
 ) -> dict[str, Gaussian]:
     out = {}
     for key, value in spec.items():
@@ -695,6 +698,12 @@ def _probability(
     return value
 
 
+#: What a part may say besides its features' constraints.
+PART_KEYS = frozenset(
+    {"required", "missing", "occluded", "description", "seed", "cad", "supports", "lying", "layer"}
+)
+
+
 def _part(name: str, spec: Any, path: tuple[Any, ...], seeds: Mapping[str, Any]) -> Part:
     spec = _mapping(spec, path)
     required = spec.get("required", True)
@@ -703,14 +712,15 @@ def _part(name: str, spec: Any, path: tuple[Any, ...], seeds: Mapping[str, Any])
     missing = _probability(spec, "missing", path, DEFAULT_MISSING[required])
     occluded = _probability(spec, "occluded", path)
     supports, lying = spec.get("supports", False), spec.get("lying", False)
-    for key, value in (("supports", supports), ("lying", lying)):
+    layer = spec.get("layer", False)
+    for key, value in (("supports", supports), ("lying", lying), ("layer", layer)):
         if not isinstance(value, bool):
             raise _Problem(path + (key,), f"expected true or false, got {value!r}")
     constraints = _constraints(
         spec,
         PART_FEATURES,
         path,
-        {"required", "missing", "occluded", "description", "seed", "cad", "supports", "lying"},
+        PART_KEYS,
     )
     seed = spec.get("seed")
     if seed is not None:
@@ -737,6 +747,7 @@ def _part(name: str, spec: Any, path: tuple[Any, ...], seeds: Mapping[str, Any])
         cad_above_seat=above,
         supports=supports,
         lying=lying,
+        layer=layer,
     )
 
 

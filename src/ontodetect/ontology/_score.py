@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ._features import CUT_MARGIN, FEATURES, patch_members
+from ._features import CUT_MARGIN, FEATURES, is_patch, patch_members
 from ._gaussian import Gaussian
 from ._schema import ObjectClass, Ontology, Part
 
@@ -209,7 +209,7 @@ class ClusterDescription:
             floor_seen = math.nan if seen is None else float(seen[c])
             if (
                 float(top.tilt) > HORIZONTAL_TILT
-                or patch_members(top)
+                or is_patch(top)
                 or getattr(top, "axes", None) is None
                 or not floor_seen >= SUPPORT_OPEN
             ):
@@ -219,7 +219,7 @@ class ClusterDescription:
             half = np.array([float(top.length), float(top.width)]) / 2 + SUPPORT_MARGIN
             mine = set()
             for k, p in enumerate(self.planes):
-                if k == c or float(p.tilt) < UPRIGHT_TILT or patch_members(p):
+                if k == c or float(p.tilt) < UPRIGHT_TILT or is_patch(p):
                     continue
                 if float(p.z_max) > float(top.z_max) + SUPPORT_MARGIN:
                     continue
@@ -251,6 +251,11 @@ class ClusterDescription:
         return np.array([getattr(p, "kind", None) == "lying" for p in self.planes], dtype=bool)
 
     @functools.cached_property
+    def layer(self) -> NDArray[np.bool_]:
+        """(planes,) which planes are seats' level layers (``Patch.kind == "layer"``)."""
+        return np.array([getattr(p, "kind", None) == "layer" for p in self.planes], dtype=bool)
+
+    @functools.cached_property
     def _part_values(self) -> dict[str, NDArray[np.float64]]:
         """:func:`part_values` by feature, filled as the classes ask for them: every class
         scores the same planes, most of them with the same features."""
@@ -265,7 +270,7 @@ class ClusterDescription:
             [float(p.tilt) < HORIZONTAL_TILT and float(p.area) >= SURFACE_AREA for p in planes],
             dtype=bool,
         )
-        return _plane_weights(planes), surface, [bool(patch_members(p)) for p in planes]
+        return _plane_weights(planes), surface, [is_patch(p) for p in planes]
 
     @property
     def rise(self) -> float:
@@ -273,7 +278,7 @@ class ClusterDescription:
         tops = [
             float(p.z_max)
             for p in self.planes
-            if float(p.tilt) <= HORIZONTAL_TILT and not patch_members(p)
+            if float(p.tilt) <= HORIZONTAL_TILT and not is_patch(p)
         ]
         return max(0.0, self.height - max(tops)) if tops else self.height
 
@@ -399,13 +404,16 @@ def _extra_log(cls: ObjectClass, desc: ClusterDescription) -> np.ndarray:
 
 def _unary(cls: ObjectClass, desc: ClusterDescription) -> np.ndarray:
     """(parts, planes) log-factor of each plane as each part, relations left out; a
-    lying surface is no candidate for a part that does not say ``lying``."""
+    lying surface is no candidate for a part that does not say ``lying``, a seat's level
+    layer none for one that does not say ``layer``."""
     out = np.zeros((len(cls.parts), len(desc.planes)))
     cache = desc._part_values
-    lying = desc.lying
+    lying, layer = desc.lying, desc.layer
     for p, part in enumerate(cls.parts):
         if not part.lying and lying.any():
             out[p, lying] = -math.inf
+        if not part.layer and layer.any():
+            out[p, layer] = -math.inf
         for feature, g in part.constraints.items():
             values = cache.get(feature)
             if values is None:
@@ -677,7 +685,7 @@ def score_class(
     used = {c for c in best_assign if c is not None}
     used = used.union(*(more[p][c] for p, c in enumerate(best_assign) if c is not None))
     unexplained = [
-        k for k, plane in enumerate(desc.planes) if k not in used and not patch_members(plane)
+        k for k, plane in enumerate(desc.planes) if k not in used and not is_patch(plane)
     ]
     if unexplained and (cls.extra_plane < 1.0 or cls.extra_surface is not None):
         f = math.exp(float(sum(plane_log_extra[k] for k in unexplained)))

@@ -28,7 +28,7 @@ from ._cluster import (
     region_growing,
 )
 from ._parts import PartSeed, horizontal_parts, seeded_clusters
-from .planes import curved_patches, extract_planes, level_surfaces, plane_relations
+from .planes import curved_patches, extract_planes, level_surfaces, plane_relations, seat_layer
 
 __all__ = ["Box", "Cluster", "Segmentation", "cluster", "clusters_of_voxels", "segment"]
 
@@ -592,6 +592,17 @@ def _build_cluster(
             patches = curved_patches(pts, planes, relations, cols, rng=rng)
         if pc.level_surfaces and relations:
             patches = [*patches, *level_surfaces(pts, planes, relations, cols, rng=rng)]
+        if pc.seat_layer and len(pts) > 1:
+            given = normals
+            layer = seat_layer(
+                pts, planes,
+                (lambda: given) if given is not None
+                else (lambda: graph_normals(pts, radius_graph(pts, radius))[0]),
+                cols, threshold=pc.threshold, min_points=min_plane_points,
+                connectivity=radius, rng=rng,
+            )  # fmt: skip
+            if layer is not None:
+                patches = [*patches, layer]
         if patches:
             # The planes' own pairs are measured: only those with a patch are new.
             added = plane_relations(pts, [*planes, *patches], since=len(planes))

@@ -52,6 +52,7 @@ __all__ = [
     "level_surfaces",
     "msac",
     "plane_relations",
+    "seat_layer",
 ]
 
 # -- tolerances and tuning constants --------------------------------------------------------
@@ -144,6 +145,17 @@ PATCH_MIN_TURN = 10.0
 #: 20 cm and more above a seat (EN 1335-1, Table 4.1), so it never joins one.
 LEVEL_TILT = 10.0
 LEVEL_STEP = 0.08
+#: :func:`seat_layer`: where a seat may lie, metres above the floor: Table 4.1's seating
+#: plane (35-75 cm) less 5 cm for a cushion that sags under its own cover (catalogue
+#: upholstered seats, EN 1022 / EN 12520 domestic seat heights 38-48 cm).
+SEAT_LAYER_HEIGHTS = (0.30, 0.75)
+#: ... its points face up: a normal within this of the vertical (degrees). A seat is a
+#: surface one sits on, so it faces up even where it is not one plane; a band of the same
+#: height across a wall, a curtain or a backrest faces sideways.
+SEAT_LAYER_FACING = 30.0
+#: ... and it holds more than this share of the points of the cluster that face up at those
+#: heights: the one surface there, not one shelf of several.
+SEAT_LAYER_SHARE = 0.5
 
 
 def _readonly(a: NDArray[Any]) -> NDArray[Any]:
@@ -870,8 +882,10 @@ class Patch(Plane):
         Root mean square angle (degrees) between the members' normals and the patch's,
         weighted by the members' areas: 0 for a plane.
     kind : str
-        ``"curved"`` (:func:`curved_patches`) or ``"lying"`` (:func:`level_surfaces`: level
-        pieces of one lying surface, which only the parts that say ``lying`` may take).
+        ``"curved"`` (:func:`curved_patches`), ``"lying"`` (:func:`level_surfaces`: level
+        pieces of one lying surface, which only the parts that say ``lying`` may take) or
+        ``"layer"`` (:func:`seat_layer`: a seat MSAC did not fit, for the parts that say
+        ``layer``).
     """
 
     members: tuple[int, ...] = ()
@@ -1070,6 +1084,91 @@ def level_surfaces(
         pts, planes, joined, colors, floor_z=floor_z, rng=rng, kind="lying",
         fit_ok=lambda fit: fit.tilt <= max_tilt,
     )  # fmt: skip
+
+
+def seat_layer(
+    points: ArrayLike,
+    planes: Sequence[Plane],
+    normals: ArrayLike | Callable[[], ArrayLike],
+    colors: ArrayLike | None = None,
+    *,
+    threshold: float,
+    min_points: int,
+    connectivity: float,
+    floor_z: float = 0.0,
+    heights: tuple[float, float] = SEAT_LAYER_HEIGHTS,
+    facing: float = SEAT_LAYER_FACING,
+    rng: int | np.random.Generator | None = None,
+) -> Patch | None:
+    """The level surface facing up at seat height that MSAC did not fit as a plane.
+
+    An upholstered, cane or sagging seat is level (Table 4.1: within ±6°) but not flat:
+    MSAC's plane with the most inliers then runs slanted through seat and backrest, and the
+    seat is never a plane of its own. Its points still face up and pile up at one height.
+    ``normals`` (one per point, or a function that gives them, called only when needed):
+    among the points at ``heights`` whose ``normals`` are within ``facing`` degrees of the
+    vertical, the densest level layer (:func:`level_layers`, ``threshold`` half its height)
+    is taken, its largest connected piece (steps of ``connectivity``) fitted and measured
+    whole, when that piece holds at least ``min_points`` points and more than
+    :data:`SEAT_LAYER_SHARE` of the upward-facing points there, spreads at least
+    :data:`LEVEL_MIN_WIDTH` across and fits within :data:`LEVEL_MAX_TILT` of level. Nothing
+    is offered where a level plane already lies at those heights.
+
+    Returns
+    -------
+    Patch or None
+        Of ``kind`` ``"layer"``, ``members`` the planes that hold half their inliers or
+        more in it (only the parts that say ``layer`` may take it); ``spread`` the rms
+        angle of its points' normals about its own.
+
+    Examples
+    --------
+    >>> gen = np.random.default_rng(0)  # a cushion sagging 2 cm, a backrest behind it
+    >>> u, v = gen.uniform(0, 0.45, (2, 900))
+    >>> seat = np.c_[u, v, 0.45 - 0.08 * ((u - 0.22) ** 2 + (v - 0.22) ** 2)]
+    >>> b, h = gen.uniform(0, 0.45, (2, 600))
+    >>> back = np.c_[b, np.full(600, 0.47), 0.5 + h]
+    >>> pts = np.vstack([seat, back])
+    >>> nrm = np.r_[np.tile([0.0, 0, 1], (900, 1)), np.tile([0.0, 1, 0], (600, 1))]
+    >>> layer = seat_layer(pts, [], nrm, threshold=0.01, min_points=20, connectivity=0.05)
+    >>> layer.kind, round(layer.height, 2), layer.num_points > 600
+    ('layer', 0.45, True)
+    """
+    pts = _as_points(points)
+    lo, hi = float(heights[0]) + floor_z, float(heights[1]) + floor_z
+    for p in planes:
+        if float(p.tilt) <= LEVEL_MAX_TILT and lo <= float(p.centroid[2]) <= hi:
+            return None
+    nrm = np.asarray(normals() if callable(normals) else normals, dtype=np.float64)
+    up = np.abs(nrm[:, 2]) >= math.cos(math.radians(facing))
+    cand = np.flatnonzero(up & (pts[:, 2] >= lo) & (pts[:, 2] <= hi))
+    if cand.size < min_points:
+        return None
+    bands = level_layers(pts[cand], threshold=threshold, min_inliers=min_points)
+    if not bands:
+        return None
+    band = cand[bands[0]]
+    piece = band[_largest_component(pts[band, :2], connectivity)]
+    if piece.size < min_points or piece.size <= SEAT_LAYER_SHARE * cand.size:
+        return None
+    rgb = None if colors is None else np.asarray(colors, dtype=np.float64)
+    fit = _describe(
+        pts, piece, rgb, floor_z=float(floor_z), cluster_centroid=_col_mean(pts),
+        area_cell=None, rng=np.random.default_rng(rng),
+    )  # fmt: skip
+    if fit is None or float(fit.tilt) > LEVEL_MAX_TILT or float(fit.width) < LEVEL_MIN_WIDTH:
+        return None
+    inside = np.zeros(len(pts), dtype=bool)
+    inside[piece] = True
+    members = tuple(
+        k
+        for k, p in enumerate(planes)
+        if 2 * int(inside[np.asarray(p.inliers)].sum()) >= len(p.inliers)
+    )
+    cos = np.clip(np.abs(nrm[piece] @ np.asarray(fit.normal)), 0.0, 1.0)
+    spread = float(np.sqrt(np.mean(np.degrees(np.arccos(cos)) ** 2)))
+    fields = {f.name: getattr(fit, f.name) for f in dataclasses.fields(Plane)}
+    return Patch(**fields, members=members, spread=spread, kind="layer")
 
 
 def _in_plane_basis(normal: NDArray[np.float64]) -> NDArray[np.float64]:
