@@ -179,6 +179,20 @@ def test_explain_filtered_by_class_and_size_and_as_json(scene, tmp_path, capsys)
     assert main([*args, "--votes", "1", "--explain", "chair,table", "-q"]) == 0
     text = capsys.readouterr().out
     assert "constraints of chair" in text and "constraints of sofa" not in text
+    # A class named is shown on every cluster kept, however unlikely there: why a chair
+    # is not a WC.
+    assert main([*args, "--votes", "1", "--json", "--explain", "chair,toilet"]) == 0
+    rows = json.loads(capsys.readouterr().out)["explain"]
+    assert rows
+    for row in rows:
+        toilet = [c for c in row["classes"] if c["class"] == "toilet"]
+        assert len(toilet) == 1 and toilet[0]["named"] and toilet[0]["constraints"]
+        assert not any(
+            c.get("named") for c in row["classes"] if c["class"] not in {"chair", "toilet"}
+        )
+    assert main([*args, "--votes", "1", "--explain", "chair,toilet", "-q"]) == 0
+    text = capsys.readouterr().out
+    assert text.count("constraints of toilet") == len(rows)
 
 
 def test_detect_many_scans_from_a_folder_a_glob_and_paths(scene, tmp_path, capsys):

@@ -360,7 +360,9 @@ def explain(
         (``class``) is shown as well when it is not among them.
     classes : sequence of str, optional
         Keep only the clusters labelled with one of these, or whose most probable class
-        (other than none) is one of these.
+        (other than none) is one of these; each of these classes is shown on them too,
+        however unlikely, marked ``named`` (why a WC read as a chair is not a toilet:
+        ``classes=["chair", "toilet"]``).
     min_points : int
         Keep only the clusters with at least this many points (most clusters of a real
         scan are a few points of noise).
@@ -368,6 +370,7 @@ def explain(
     if isinstance(min_points, bool) or not isinstance(min_points, int) or min_points < 0:
         raise InvalidParameterError("min_points", "an integer >= 0", min_points)
     wanted = None if classes is None else set(classes)
+    wanted_order = [] if classes is None else list(dict.fromkeys(classes))
     rows = []
     cands = result.candidates
     origin = {c.cluster: i for i, c in enumerate(cands) if c.cluster is not None}
@@ -383,8 +386,9 @@ def explain(
         # weighs its discriminative term too; a variant takes its label's probability).
         chosen = choice.extra.get("class")
         shown = ranked[:top]
-        if chosen is not None and all(name != chosen for name, _ in shown):
-            shown = [*shown, (chosen, s.probabilities[chosen])]
+        for name in [chosen, *(wanted_order if wanted is not None else ())]:
+            if name is not None and name in s.classes and all(n != name for n, _ in shown):
+                shown = [*shown, (name, s.probabilities[name])]
         classes = []
         for name, p in shown:
             if name == "none":
@@ -394,6 +398,7 @@ def explain(
             classes.append(
                 {
                     "class": name,
+                    "named": wanted is not None and name in wanted,
                     "probability": p,
                     "likelihood": cs.likelihood,
                     "prior": float(np.exp(cs.log_prior)),

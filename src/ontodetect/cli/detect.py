@@ -495,16 +495,22 @@ def _print_explain(rows) -> None:
         best = best or next((c for c in row["classes"] if c["class"] != "none"), None)
         if best is None:
             continue
-        cons = Table(title=f"constraints of {best['class']}", box=None, pad_edge=False)
-        for col in ("part", "feature", "factor group", "value", "rule", "probability"):
-            cons.add_column(col)
-        for v in best["constraints"]:
-            value = (
-                f"{v['value']:.3g}"
-                if v["value"] is not None
-                else ("missing" if v["feature"] == "missing" else "not measured")
-            )
-            cons.add_row(
-                v["part"], v["feature"], v["group"], value, v["rule"], f"{v['factor']:.3g}"
-            )
-        console.print(cons)
+        # The best class's constraints, then those of every other class asked for by name.
+        named = [c for c in row["classes"] if c.get("named") and c["class"] != best["class"]]
+        for shown in (best, *named):
+            console.print(_constraints_table(shown))
+
+
+def _constraints_table(cls: dict) -> Table:
+    """One class's constraints on a cluster, as ``--explain`` prints them."""
+    cons = Table(title=f"constraints of {cls['class']}", box=None, pad_edge=False)
+    for col in ("part", "feature", "factor group", "value", "rule", "probability"):
+        cons.add_column(col)
+    for v in cls["constraints"]:
+        value = (
+            f"{v['value']:.3g}"
+            if v["value"] is not None
+            else ("missing" if v["feature"] == "missing" else "not measured")
+        )
+        cons.add_row(v["part"], v["feature"], v["group"], value, v["rule"], f"{v['factor']:.3g}")
+    return cons
