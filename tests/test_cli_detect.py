@@ -92,6 +92,7 @@ def test_detect_explain_prints_constraints(scene, tmp_path, capsys):
         (["--viewpoint", "1,up,2"], "'--viewpoint'"),
         (["--labelled-format", "obj"], "'labelled_format'"),
         (["--export", "boxes,kitti"], "'exports'"),
+        (["--explain", "chair,chiar"], "'--explain'"),
     ],
 )
 def test_detect_bad_parameters_exit_2_with_one_line(scene, tmp_path, capsys, args, message):

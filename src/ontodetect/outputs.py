@@ -41,6 +41,7 @@ __all__ = [
     "LAS_CLASS_BASE",
     "LAS_UNCLASSIFIED",
     "OutputFiles",
+    "check_explain_classes",
     "check_output_options",
     "detect_file",
     "explain",
@@ -338,6 +339,27 @@ def detect_file(
     return write_outputs(result, out_dir, **write_options)
 
 
+def check_explain_classes(ontology: Any, classes: Sequence[str], name: str = "classes") -> None:
+    """Raise :class:`InvalidParameterError` (naming ``name``) when one of ``classes`` is
+    neither a class nor a label of ``ontology``: a misspelt class would explain nothing.
+
+    Examples
+    --------
+    >>> from ontodetect.ontology import builtin_ontology
+    >>> check_explain_classes(builtin_ontology(), ["chair", "toilet"])
+    >>> check_explain_classes(builtin_ontology(), ["chiar"])  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    ontodetect.errors.InvalidParameterError: The 'classes' parameter must be class names ...
+    """
+    known = {c.name for c in ontology.classes} | {c.label for c in ontology.classes}
+    unknown = sorted(set(classes) - known)
+    if unknown:
+        raise InvalidParameterError(
+            name, f"class names of the ontology ({', '.join(ontology.names)})", ",".join(unknown)
+        )
+
+
 def explain(
     result: Result,
     *,
@@ -369,6 +391,8 @@ def explain(
     """
     if isinstance(min_points, bool) or not isinstance(min_points, int) or min_points < 0:
         raise InvalidParameterError("min_points", "an integer >= 0", min_points)
+    if classes is not None:
+        check_explain_classes(result.ontology, classes)
     wanted = None if classes is None else set(classes)
     wanted_order = [] if classes is None else list(dict.fromkeys(classes))
     rows = []

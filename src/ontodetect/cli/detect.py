@@ -185,7 +185,12 @@ def detect(
 ) -> None:
     """Detect objects; write detections.json, labelled.ply, boxes.txt and detections.png
     (and mesh.ply with --mesh)."""
-    from ..outputs import check_output_options, explain, write_outputs  # lazy: CLI start-up
+    from ..outputs import (  # lazy: CLI start-up
+        check_explain_classes,
+        check_output_options,
+        explain,
+        write_outputs,
+    )
     from ..pipeline import detect as run_detect  # lazy: CLI start-up
 
     exports = tuple(n.strip() for n in export.split(",") if n.strip())
@@ -206,6 +211,8 @@ def detect(
         classes=classes,
     )
     onto = load_ontology_option(ontology, ontology_only)
+    if explain_classes is not None:  # before any work: a misspelt class would show nothing
+        check_explain_classes(onto, explain_classes, "--explain")
     room_arg = room_option(room, room_probs)
     scene_rooms = scene_image_room(scene_image, env_model, room, room_probs)
     eye = number_list(viewpoint, float, "--viewpoint")
