@@ -93,6 +93,7 @@ def test_detect_explain_prints_constraints(scene, tmp_path, capsys):
         (["--labelled-format", "obj"], "'labelled_format'"),
         (["--export", "boxes,kitti"], "'exports'"),
         (["--explain", "chair,chiar"], "'--explain'"),
+        (["--explain", "--min-points", "-3"], "'--min-points'"),
     ],
 )
 def test_detect_bad_parameters_exit_2_with_one_line(scene, tmp_path, capsys, args, message):
@@ -101,6 +102,7 @@ def test_detect_bad_parameters_exit_2_with_one_line(scene, tmp_path, capsys, arg
     err = capsys.readouterr().err.strip()
     assert message in err and err.startswith("error:")
     assert "Traceback" not in err
+    assert not (tmp_path / "o").exists()  # refused before any work
 
 
 def test_detect_missing_input(tmp_path, capsys):

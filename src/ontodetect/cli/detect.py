@@ -11,7 +11,7 @@ from rich.table import Table
 from rich.text import Text
 
 from ..cloud import as_position
-from ..errors import OntoDetectError
+from ..errors import InvalidParameterError, OntoDetectError
 from ..geometry import jsonable
 from ..io import expand_inputs, read_cloud
 from . import app
@@ -213,6 +213,8 @@ def detect(
     onto = load_ontology_option(ontology, ontology_only)
     if explain_classes is not None:  # before any work: a misspelt class would show nothing
         check_explain_classes(onto, explain_classes, "--explain")
+    if min_points < 0:
+        raise InvalidParameterError("--min-points", "an integer >= 0", min_points)
     room_arg = room_option(room, room_probs)
     scene_rooms = scene_image_room(scene_image, env_model, room, room_probs)
     eye = number_list(viewpoint, float, "--viewpoint")
