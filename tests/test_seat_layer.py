@@ -33,6 +33,18 @@ def _back(z0=0.47, height=0.45, size=0.45, lean=15.0, per=900, seed=1):
     return np.c_[u, size + h * math.tan(math.radians(lean)), z0 + h]
 
 
+def _legs(z=0.45, size=0.45, per=60, seed=2):
+    """Four legs from the floor up to under a seat of side ``size`` at height ``z``."""
+    gen = np.random.default_rng(seed)
+    corners = [(0.02, 0.02), (size - 0.02, 0.02), (0.02, size - 0.02), (size - 0.02, size - 0.02)]
+    return np.vstack(
+        [
+            np.c_[np.full(per, x), np.full(per, y), gen.uniform(0.0, z - 0.05, per)]
+            for x, y in corners
+        ]
+    )
+
+
 def _normals(pts, radius=0.05):
     return graph_normals(pts, radius_graph(pts, radius))[0]
 
@@ -45,7 +57,7 @@ def _layer(pts, planes=(), radius=0.05):
 
 
 def test_a_sagging_cushion_is_one_layer_at_its_height():
-    pts = np.vstack([_cushion(), _back()])
+    pts = np.vstack([_cushion(), _back(), _legs()])
     layer = _layer(pts)
     assert isinstance(layer, Patch) and layer.kind == "layer"
     assert layer.tilt < 3.0
@@ -62,7 +74,7 @@ def test_a_sagging_cushion_is_one_layer_at_its_height():
 
 
 def test_no_layer_where_a_level_plane_already_lies_at_seat_height():
-    flat = np.vstack([_cushion(sag=0.0), _back()])
+    flat = np.vstack([_cushion(sag=0.0), _back(), _legs()])
     planes = extract_planes(flat, threshold=0.005, max_planes=4, min_points=40, rng=0)
     assert any(p.tilt < 2.0 for p in planes)
     assert _layer(flat, planes) is None
@@ -90,14 +102,19 @@ def test_a_layer_must_be_the_one_surface_there():
         np.c_[gen.uniform(0, 0.8, 800), gen.uniform(0, 0.3, 800), z + 0.01 * gen.random(800)]
         for z in (0.35, 0.6)
     ]
-    assert _layer(np.vstack(shelves)) is None
-    assert _layer(shelves[0]) is not None
+    sides = np.c_[gen.uniform(0, 0.8, 400), np.full(400, -0.1), gen.uniform(0, 0.6, 400)]
+    assert _layer(np.vstack([*shelves, sides])) is None
+    assert _layer(np.vstack([shelves[0], sides])) is not None
+    # A cushion with nothing under it down to the floor (on a bed, on a shelf): no seat.
+    assert _layer(np.vstack([_cushion(), _back()])) is None
 
 
 @settings(max_examples=20, deadline=None)
 @given(sag=st.floats(0.0, 0.04), z=st.floats(0.36, 0.6), seed=st.integers(0, 10_000))
 def test_any_cushion_gives_a_level_layer_at_its_rim_or_below(sag, z, seed):
-    pts = np.vstack([_cushion(z=z, sag=sag, seed=seed), _back(z0=z + 0.02, seed=seed + 1)])
+    pts = np.vstack(
+        [_cushion(z=z, sag=sag, seed=seed), _back(z0=z + 0.02, seed=seed + 1), _legs(z=z)]
+    )
     layer = _layer(pts)
     assert layer is not None and layer.tilt <= 10.0
     assert z - sag - 0.011 <= layer.height <= z + 0.011
@@ -107,7 +124,8 @@ def _scored(layer_on):
     """The chair's score on a sagging seat and a flat backrest, with MSAC's planes only or
     with the seat's layer beside them."""
     back = _back(lean=12.0)
-    pts = np.vstack([back, _cushion(sag=0.04)])  # the back's points first: its inliers index both
+    # The back's points first: its inliers index both.
+    pts = np.vstack([back, _cushion(sag=0.04), _legs()])
     # The backrest fitted and the seat not, as MSAC leaves a cushion when its best plane
     # runs slanted through seat and back.
     planes = extract_planes(back, threshold=0.004, max_planes=2, min_points=60, rng=0)

@@ -156,6 +156,9 @@ SEAT_LAYER_FACING = 30.0
 #: ... and it holds more than this share of the points of the cluster that face up at those
 #: heights: the one surface there, not one shelf of several.
 SEAT_LAYER_SHARE = 0.5
+#: ... in a cluster that reaches this close (m) to the floor: a seat stands on its legs or
+#: its base (a pillow on a bed, a cushion on a shelf do not).
+SEAT_LAYER_FOOT = 0.1
 
 
 def _readonly(a: NDArray[Any]) -> NDArray[Any]:
@@ -1105,11 +1108,13 @@ def seat_layer(
     An upholstered, cane or sagging seat is level (Table 4.1: within ±6°) but not flat:
     MSAC's plane with the most inliers then runs slanted through seat and backrest, and the
     seat is never a plane of its own. Its points still face up and pile up at one height.
-    ``normals`` (one per point, or a function that gives them, called only when needed):
-    among the points at ``heights`` whose ``normals`` are within ``facing`` degrees of the
-    vertical, the densest level layer (:func:`level_layers`, ``threshold`` half its height)
-    is taken, its largest connected piece (steps of ``connectivity``) fitted and measured
-    whole, when that piece holds at least ``min_points`` points and more than
+    Only a cluster that reaches within :data:`SEAT_LAYER_FOOT` of the floor is searched: a
+    seat stands on its legs or base. ``normals`` are one per point, or a function that
+    gives them, called only when needed. Among the points at ``heights`` whose normals
+    are within ``facing`` degrees of the vertical, the densest level layer
+    (:func:`level_layers`, ``threshold`` half its height) is taken, its largest
+    connected piece (steps of ``connectivity``) fitted and measured whole, when that
+    piece holds at least ``min_points`` points and more than
     :data:`SEAT_LAYER_SHARE` of the upward-facing points there, spreads at least
     :data:`LEVEL_MIN_WIDTH` across and fits within :data:`LEVEL_MAX_TILT` of level. Nothing
     is offered where a level plane already lies at those heights.
@@ -1128,14 +1133,21 @@ def seat_layer(
     >>> seat = np.c_[u, v, 0.45 - 0.08 * ((u - 0.22) ** 2 + (v - 0.22) ** 2)]
     >>> b, h = gen.uniform(0, 0.45, (2, 600))
     >>> back = np.c_[b, np.full(600, 0.47), 0.5 + h]
-    >>> pts = np.vstack([seat, back])
-    >>> nrm = np.r_[np.tile([0.0, 0, 1], (900, 1)), np.tile([0.0, 1, 0], (600, 1))]
+    >>> xy = np.repeat([[0.02, 0.02], [0.43, 0.02], [0.02, 0.43], [0.43, 0.43]], 100, axis=0)
+    >>> legs = np.c_[xy, gen.uniform(0.0, 0.4, 400)]  # down to the floor
+    >>> pts = np.vstack([seat, back, legs])
+    >>> nrm = np.repeat([[0.0, 0, 1], [0.0, 1, 0], [1.0, 0, 0]], [900, 600, 400], axis=0)
     >>> layer = seat_layer(pts, [], nrm, threshold=0.01, min_points=20, connectivity=0.05)
     >>> layer.kind, round(layer.height, 2), layer.num_points > 600
     ('layer', 0.45, True)
+    >>> seat_layer(pts[:1500], [], nrm[:1500], threshold=0.01, min_points=20,
+    ...            connectivity=0.05) is None  # nothing under it to the floor: a pillow
+    True
     """
     pts = _as_points(points)
     lo, hi = float(heights[0]) + floor_z, float(heights[1]) + floor_z
+    if not len(pts) or float(pts[:, 2].min()) > floor_z + SEAT_LAYER_FOOT:
+        return None
     for p in planes:
         if float(p.tilt) <= LEVEL_MAX_TILT and lo <= float(p.centroid[2]) <= hi:
             return None
