@@ -410,7 +410,7 @@ def explain(
         # weighs its discriminative term too; a variant takes its label's probability).
         chosen = choice.extra.get("class")
         shown = ranked[:top]
-        for name in [chosen, *(wanted_order if wanted is not None else ())]:
+        for name in [chosen, *wanted_order]:
             if name is not None and name in s.classes and all(n != name for n, _ in shown):
                 shown = [*shown, (name, s.probabilities[name])]
         classes = []

@@ -245,15 +245,19 @@ class ClusterDescription:
                     out[j].add(k)
         return [frozenset(x) for x in out]
 
+    def of_kind(self, kind: str) -> NDArray[np.bool_]:
+        """(planes,) which planes are patches of ``kind`` (``Patch.kind``)."""
+        return np.array([getattr(p, "kind", None) == kind for p in self.planes], dtype=bool)
+
     @functools.cached_property
     def lying(self) -> NDArray[np.bool_]:
         """(planes,) which planes are lying surfaces (``Patch.kind == "lying"``)."""
-        return np.array([getattr(p, "kind", None) == "lying" for p in self.planes], dtype=bool)
+        return self.of_kind("lying")
 
     @functools.cached_property
     def layer(self) -> NDArray[np.bool_]:
         """(planes,) which planes are seats' level layers (``Patch.kind == "layer"``)."""
-        return np.array([getattr(p, "kind", None) == "layer" for p in self.planes], dtype=bool)
+        return self.of_kind("layer")
 
     @functools.cached_property
     def _part_values(self) -> dict[str, NDArray[np.float64]]:
@@ -408,12 +412,11 @@ def _unary(cls: ObjectClass, desc: ClusterDescription) -> np.ndarray:
     layer none for one that does not say ``layer``."""
     out = np.zeros((len(cls.parts), len(desc.planes)))
     cache = desc._part_values
-    lying, layer = desc.lying, desc.layer
     for p, part in enumerate(cls.parts):
-        if not part.lying and lying.any():
-            out[p, lying] = -math.inf
-        if not part.layer and layer.any():
-            out[p, layer] = -math.inf
+        # Patches of the kinds only a part that says so may take.
+        for mask, allowed in ((desc.lying, part.lying), (desc.layer, part.layer)):
+            if not allowed and mask.any():
+                out[p, mask] = -math.inf
         for feature, g in part.constraints.items():
             values = cache.get(feature)
             if values is None:

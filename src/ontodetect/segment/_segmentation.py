@@ -593,11 +593,10 @@ def _build_cluster(
         if pc.level_surfaces and relations:
             patches = [*patches, *level_surfaces(pts, planes, relations, cols, rng=rng)]
         if pc.seat_layer and len(pts) > 1:
-            given = normals
             layer = seat_layer(
                 pts, planes,
-                (lambda: given) if given is not None
-                else (lambda: graph_normals(pts, radius_graph(pts, radius))[0]),
+                lambda: graph_normals(pts, radius_graph(pts, radius))[0]
+                if normals is None else normals,
                 cols, threshold=pc.threshold, min_points=min_plane_points,
                 connectivity=radius, rng=rng,
             )  # fmt: skip

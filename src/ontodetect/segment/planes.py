@@ -1007,11 +1007,23 @@ def _joined_patches(
         if fit is None or not fit_ok(fit):
             continue
         areas = np.array([float(planes[i].area) for i in members])
-        cos = np.clip(np.abs(normals @ fit.normal), 0.0, 1.0)
-        spread = float(np.sqrt(np.average(np.degrees(np.arccos(cos)) ** 2, weights=areas)))
-        fields = {f.name: getattr(fit, f.name) for f in dataclasses.fields(Plane)}
-        out.append(Patch(**fields, members=tuple(members), spread=spread, kind=kind))
+        out.append(_patch(fit, normals, tuple(members), kind, weights=areas))
     return out
+
+
+def _patch(
+    fit: Plane,
+    normals: NDArray[np.float64],
+    members: tuple[int, ...],
+    kind: str,
+    weights: NDArray[np.float64] | None = None,
+) -> Patch:
+    """The :class:`Patch` of ``kind`` measured as the plane ``fit``, its ``spread`` the
+    root mean square angle (degrees) of ``normals`` about its own (weighed by ``weights``)."""
+    cos = np.clip(np.abs(normals @ np.asarray(fit.normal)), 0.0, 1.0)
+    spread = float(np.sqrt(np.average(np.degrees(np.arccos(cos)) ** 2, weights=weights)))
+    fields = {f.name: getattr(fit, f.name) for f in dataclasses.fields(Plane)}
+    return Patch(**fields, members=members, spread=spread, kind=kind)
 
 
 def level_surfaces(
@@ -1177,10 +1189,7 @@ def seat_layer(
         for k, p in enumerate(planes)
         if 2 * int(inside[np.asarray(p.inliers)].sum()) >= len(p.inliers)
     )
-    cos = np.clip(np.abs(nrm[piece] @ np.asarray(fit.normal)), 0.0, 1.0)
-    spread = float(np.sqrt(np.mean(np.degrees(np.arccos(cos)) ** 2)))
-    fields = {f.name: getattr(fit, f.name) for f in dataclasses.fields(Plane)}
-    return Patch(**fields, members=members, spread=spread, kind="layer")
+    return _patch(fit, nrm[piece], members, "layer")
 
 
 def _in_plane_basis(normal: NDArray[np.float64]) -> NDArray[np.float64]:
