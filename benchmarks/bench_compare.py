@@ -15,6 +15,7 @@ by side, so that the note of a change can give all three:
 - robustness: TP / detections / ground truth and precision and recall per class on the real
   scans changed as sensors change them (noise, a floor unseen, points doubled, half the
   points);
+- sparse: the same on the simulated fused scans with half and a quarter of their points;
 - stability: mean and worst, and per change of the scan; the reference detections some
   change lost, by scan and by what they really are, and how many changes lost each;
 - the objects that changed, one by one (for runs that list their ``mistakes``), in each part
@@ -62,11 +63,11 @@ def load_run(path: Path) -> dict[str, Any]:
         doc = json.loads(text)
     except json.JSONDecodeError as exc:
         raise CompareError(f"{path}: not JSON (line {exc.lineno}: {exc.msg})") from None
-    parts = ("real", "robustness", "simulated", "stability", "frames")
+    parts = ("real", "robustness", "simulated", "stability", "frames", "sparse")
     if not isinstance(doc, dict) or not any(k in doc for k in parts):
         raise CompareError(
             f"{path}: not a generalization benchmark result (no 'real', 'robustness', "
-            "'simulated', 'stability' or 'frames' part)"
+            "'simulated', 'stability', 'frames' or 'sparse' part)"
         )
     fmt = doc.get("format")
     if fmt is not None and fmt not in FORMATS:
@@ -405,6 +406,13 @@ def compare(
             lambda b, a: robustness_rows(b, a, _real(before), _real(after)),
         ),
         (
+            "sparse",
+            "Sparse",
+            "the simulated fused scans with fewer points, TP/det/GT at point IoU 0.25",
+            ["change, class", "before", "after", "P / R before", "P / R after"],
+            lambda b, a: robustness_rows(b, a),
+        ),
+        (
             "stability",
             "Stability",
             "detections that reappear, mean / worst",
@@ -426,15 +434,16 @@ def compare(
             "scan: detection (really is)",
             changed,
         )
-    robust = before.get("robustness"), after.get("robustness")
-    if None not in robust:
-        out += _objects(
-            "Robustness",
-            [_lists_robustness(r) for r in robust],
-            robustness_objects(*robust),
-            "change / scan: object",
-            changed,
-        )
+    for part, title in (("robustness", "Robustness"), ("sparse", "Sparse")):
+        runs = before.get(part), after.get(part)
+        if None not in runs:
+            out += _objects(
+                title,
+                [_lists_robustness(r) for r in runs],
+                robustness_objects(*runs),
+                "change / scan: object",
+                changed,
+            )
     return out
 
 

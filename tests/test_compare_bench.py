@@ -31,6 +31,7 @@ def run_doc(
     real=True,
     noisy=(5, 6),
     frames=(4, 5, 9),
+    sparse=(20, 24),
 ):
     key = "iou@0.25"
     doc = {
@@ -71,6 +72,15 @@ def run_doc(
                 "noise 1 cm": {
                     "per_class": {"chair": fig(*noisy, 12), "table": fig(2, 3, 4)},
                     "floor_scatter": 0.0099,
+                }
+            }
+        }
+    if sparse is not None:
+        doc["sparse"] = {
+            "changes": {
+                "a quarter of the points": {
+                    "per_class": {"chair": fig(*sparse, 30)},
+                    "floor_scatter": 0.006,
                 }
             }
         }
@@ -457,3 +467,24 @@ def test_the_robustness_part_lists_the_objects_that_changed_under_each_change():
     line = "Robustness: the objects that changed: not listed in the first run"
     assert line in C.compare(run_doc(), after)
     assert not any("Robustness: the objects" in str(i) for i in C.compare(run_doc(), run_doc()))
+
+
+def test_the_sparse_part_is_compared_as_the_robustness_part_is():
+    """The simulated fused scans with fewer points: TP/det/GT and P / R per change and
+    class, and the objects that changed under each change; a run without the part (runs
+    made before it) says so."""
+    before, after = run_doc(), run_doc(sparse=(22, 25))
+    lost = ("office-s0-fused", 16, "chair", "scored", "")
+    before["sparse"]["changes"]["a quarter of the points"]["mistakes"] = mistakes(missed=[lost])
+    after["sparse"]["changes"]["a quarter of the points"]["mistakes"] = mistakes()
+    tables = {i.title: i for i in C.compare(before, after, changed=True) if isinstance(i, Table)}
+    rows = cells(
+        tables["Sparse: the simulated fused scans with fewer points, TP/det/GT at point IoU 0.25"]
+    )
+    assert rows == [
+        ["a quarter of the points, chair", "20/24/30", "22/25/30", "0.83 / 0.67", "0.88 / 0.73"]
+    ]
+    assert cells(tables["Sparse: the objects that changed"]) == [
+        ["a quarter of the points / office-s0-fused: chair #16", "missed (scored)", "found"]
+    ]
+    assert "Sparse: not in the first run" in C.compare(run_doc(sparse=None), after)

@@ -477,10 +477,11 @@ def test_the_summary_line_times_every_part_that_ran(tmp_path, monkeypatch):
     from rich.console import Console
 
     monkeypatch.setattr(B, "console", Console(record=True, width=200))
-    doc = {part: {"seconds": s} for part, s in (("real", 12.0), ("robustness", 34.0))}
+    parts = (("real", 12.0), ("robustness", 34.0), ("simulated", 56.0), ("sparse", 78.0))
+    doc = {part: {"seconds": s} for part, s in parts}
     assert B._finish(tmp_path, doc, 0.0) == 0
     line = B.console.export_text()
-    assert "real 12 s, robustness 34 s" in line
+    assert "real 12 s, robustness 34 s, simulated 56 s, sparse 78 s" in line
     assert json.loads((tmp_path / "generalization.json").read_text())["robustness"] == {
         "seconds": 34.0
     }
