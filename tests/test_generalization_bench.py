@@ -395,6 +395,36 @@ def test_single_frames_are_every_room_type_seen_once_per_seed():
     assert len(B.frames_set(B.PARAMETRIC_ROOMS, quick=True)) == 2
 
 
+def test_the_sparse_part_scores_the_fused_scans_with_half_and_a_quarter_of_their_points(
+    monkeypatch,
+):
+    """(f) takes the fused scans of the simulated set alone (not their floor-layer, holes,
+    tilt or frame variants) through the robustness part's two density changes, and prints
+    them beside the fused scans as they are."""
+    seen = {}
+
+    def fake_robustness(scans, jobs, opts, names=None):
+        seen["scans"], seen["names"] = [s.name for s in scans], list(names)
+        chair = {"tp": 1, "det": 2, "gt": 3, "precision": 0.5, "recall": 0.33}
+        return {
+            "changes": {n: {"per_class": {"chair": chair}, "floor_scatter": None} for n in names}
+        }
+
+    monkeypatch.setattr(B, "robustness", fake_robustness)
+    monkeypatch.setattr(B, "console", Console(record=True, width=200))
+    scans = B.simulated_set(B.PARAMETRIC_ROOMS, quick=True)
+    sources = [B.SceneSource(s.name, s.name, "ontodetect", s.room) for s in scans]
+    doc = {}
+    chair = {"tp": 2, "det": 2, "gt": 3, "precision": 1.0, "recall": 0.67}
+    B._run_sparse(sources, {s.name: s for s in scans}, 1, {}, doc, {"chair": chair})
+    assert seen["scans"] == [s.name for s in scans if s.variant == "fused"]
+    assert seen["names"] == list(B.SPARSE_CHANGES) == ["half the points", "a quarter of the points"]
+    assert set(B.SPARSE_CHANGES) <= set(G.robustness_changes())
+    assert set(doc["sparse"]["changes"]) == set(B.SPARSE_CHANGES) and "seconds" in doc["sparse"]
+    text = B.console.export_text()
+    assert "as they are" in text and "2/2/3" in text and "a quarter of the points" in text
+
+
 def test_the_cache_key_changes_with_the_scans():
     source = B.RoomSource("parametric", B.PARAMETRIC_ROOMS, "")
     scans = B.simulated_set(B.PARAMETRIC_ROOMS, quick=True)
