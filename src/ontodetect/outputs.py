@@ -41,7 +41,7 @@ __all__ = [
     "LAS_CLASS_BASE",
     "LAS_UNCLASSIFIED",
     "OutputFiles",
-    "check_explain_classes",
+    "check_explain_options",
     "check_output_options",
     "detect_file",
     "explain",
@@ -339,24 +339,37 @@ def detect_file(
     return write_outputs(result, out_dir, **write_options)
 
 
-def check_explain_classes(ontology: Any, classes: Sequence[str], name: str = "classes") -> None:
-    """Raise :class:`InvalidParameterError` (naming ``name``) when one of ``classes`` is
-    neither a class nor a label of ``ontology``: a misspelt class would explain nothing.
+def check_explain_options(
+    ontology: Any,
+    classes: Sequence[str] | None,
+    min_points: int,
+    names: tuple[str, str] = ("classes", "min_points"),
+) -> None:
+    """Refuse what :func:`explain` would refuse, before any work is done: raise
+    :class:`InvalidParameterError`, naming the parameter by ``names``, when one of
+    ``classes`` is neither a class nor a label of ``ontology`` (a misspelt class would
+    explain nothing) or ``min_points`` is not an integer >= 0.
 
     Examples
     --------
     >>> from ontodetect.ontology import builtin_ontology
-    >>> check_explain_classes(builtin_ontology(), ["chair", "toilet"])
-    >>> check_explain_classes(builtin_ontology(), ["chiar"])  # doctest: +ELLIPSIS
+    >>> check_explain_options(builtin_ontology(), ["chair", "toilet"], 0)
+    >>> check_explain_options(builtin_ontology(), ["chiar"], 0)  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
     ontodetect.errors.InvalidParameterError: The 'classes' parameter must be class names ...
     """
+    if isinstance(min_points, bool) or not isinstance(min_points, int) or min_points < 0:
+        raise InvalidParameterError(names[1], "an integer >= 0", min_points)
+    if classes is None:
+        return
     known = {c.name for c in ontology.classes} | {c.label for c in ontology.classes}
     unknown = sorted(set(classes) - known)
     if unknown:
         raise InvalidParameterError(
-            name, f"class names of the ontology ({', '.join(ontology.names)})", ",".join(unknown)
+            names[0],
+            f"class names of the ontology ({', '.join(ontology.names)})",
+            ",".join(unknown),
         )
 
 
@@ -389,10 +402,7 @@ def explain(
         Keep only the clusters with at least this many points (most clusters of a real
         scan are a few points of noise).
     """
-    if isinstance(min_points, bool) or not isinstance(min_points, int) or min_points < 0:
-        raise InvalidParameterError("min_points", "an integer >= 0", min_points)
-    if classes is not None:
-        check_explain_classes(result.ontology, classes)
+    check_explain_options(result.ontology, classes, min_points)
     wanted = None if classes is None else set(classes)
     wanted_order = [] if classes is None else list(dict.fromkeys(classes))
     rows = []

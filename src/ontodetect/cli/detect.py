@@ -11,7 +11,7 @@ from rich.table import Table
 from rich.text import Text
 
 from ..cloud import as_position
-from ..errors import InvalidParameterError, OntoDetectError
+from ..errors import OntoDetectError
 from ..geometry import jsonable
 from ..io import expand_inputs, read_cloud
 from . import app
@@ -186,7 +186,7 @@ def detect(
     """Detect objects; write detections.json, labelled.ply, boxes.txt and detections.png
     (and mesh.ply with --mesh)."""
     from ..outputs import (  # lazy: CLI start-up
-        check_explain_classes,
+        check_explain_options,
         check_output_options,
         explain,
         write_outputs,
@@ -211,10 +211,8 @@ def detect(
         classes=classes,
     )
     onto = load_ontology_option(ontology, ontology_only)
-    if explain_classes is not None:  # before any work: a misspelt class would show nothing
-        check_explain_classes(onto, explain_classes, "--explain")
-    if min_points < 0:
-        raise InvalidParameterError("--min-points", "an integer >= 0", min_points)
+    # Before any work: a misspelt class would show nothing, after the whole detection.
+    check_explain_options(onto, explain_classes, min_points, ("--explain", "--min-points"))
     room_arg = room_option(room, room_probs)
     scene_rooms = scene_image_room(scene_image, env_model, room, room_probs)
     eye = number_list(viewpoint, float, "--viewpoint")
