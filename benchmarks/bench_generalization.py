@@ -1337,8 +1337,8 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
         )
         # (f) the fused scans, sparser
         if "sparse" in args.only:
-            fused = figures.get("by_variant", {}).get("fused", {}).get("iou@0.25")
-            _run_sparse(sim_sources, by_name, jobs, opts, doc, fused)
+            as_they_are = figures.get("by_variant", {}).get("fused", {}).get("iou@0.25")
+            _run_sparse(sim_sources, by_name, jobs, opts, doc, as_they_are)
 
         # (c) stability
         if "stability" not in args.only:
