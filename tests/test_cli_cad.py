@@ -94,6 +94,23 @@ def test_cad_fit_writes_detections_and_object_map(stored, tmp_path, capsys):
     assert (out / "object_map_mesh.ply").is_file()
 
 
+def test_cad_fit_into_the_detections_folder_keeps_its_files(stored, tmp_path, capsys):
+    import shutil
+
+    from ontodetect.io._atomic import staged_folder
+
+    scan, det_dir = stored
+    out = tmp_path / "run"
+    with staged_folder(out) as stage:  # a detect run's folder: its files and their marker
+        shutil.copy(det_dir / "detections.json", stage / "detections.json")
+        (stage / "labelled.ply").write_text("the detect run's cloud")
+    code = main(["cad", "fit", str(out), str(scan), "-o", str(out), "--spacing", "0.05"])
+    assert code == 0, capsys.readouterr().err
+    assert (out / "labelled.ply").read_text() == "the detect run's cloud"
+    assert "cad" in read_detections(out / "detections.json")["detections"][0]
+    assert (out / "object_map.ply").is_file()
+
+
 def test_cad_fit_options(stored, tmp_path, capsys):
     scan, det_dir = stored
     out = tmp_path / "out"

@@ -221,3 +221,23 @@ def test_detect_many_scans_from_a_folder_a_glob_and_paths(scene, tmp_path, capsy
     assert len(json.loads(capsys.readouterr().out)) == 2  # a.ply once
     assert main(["detect", str(scans / "*.pcd"), "-o", str(tmp_path / "o3"), *opts]) == 2
     assert "no readable scan matches" in capsys.readouterr().err
+
+
+def test_a_batch_with_a_scan_that_fails_exits_2_and_keeps_the_others(scene, tmp_path, capsys):
+    import shutil
+
+    scans = tmp_path / "scans"
+    scans.mkdir()
+    shutil.copy(scene / "cloud.ply", scans / "good.ply")
+    (scans / "empty.ply").write_bytes(b"")
+    out = tmp_path / "out"
+    opts = ["--no-picture", "--votes", "1", "--json", "-q"]
+    assert (
+        main(["detect", str(scans / "empty.ply"), str(scans / "good.ply"), "-o", str(out), *opts])
+        == 2
+    )
+    rows = {r["input"]: r for r in json.loads(capsys.readouterr().out)}
+    assert "error" in rows[str(scans / "empty.ply")]
+    assert rows[str(scans / "good.ply")]["objects"] > 0
+    assert (out / "good" / "detections.json").is_file()
+    assert not (out / "empty").exists()

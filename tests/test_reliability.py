@@ -370,6 +370,47 @@ def test_a_folder_with_other_files_keeps_them(room, tmp_path):
     assert (out / "detections.json").exists()
 
 
+def test_a_folder_an_earlier_run_wrote_is_replaced_beside_the_users_files(room, tmp_path):
+    out = tmp_path / "mine"
+    out.mkdir()
+    (out / "notes.txt").write_text("keep")
+    assert _detect(room[0], out, "--no-picture", "--export", "boxes,scannet") == 0
+    assert (out / "scannet").is_dir()
+    (out / "view.html").write_text("the user's")  # any other file: the per-file path
+    assert _detect(room[0], out, "--no-picture", "--export", "boxes,scannet") == 0
+    assert (out / "scannet").is_dir() and (out / "notes.txt").read_text() == "keep"
+    assert _detect(room[0], out, "--no-picture", "--export", "") == 0
+    assert not (out / "scannet").exists(), "the earlier run's export folder goes with it"
+    assert (out / "view.html").read_text() == "the user's"
+
+
+def test_a_run_that_adds_to_an_earlier_one_keeps_its_files(tmp_path):
+    from ontodetect.io._atomic import RUN_MARKER, staged_folder
+
+    out = tmp_path / "out"
+    with staged_folder(out) as stage:
+        (stage / "labelled.ply").write_text("cloud")
+        (stage / "detections.json").write_text("old")
+    with staged_folder(out, keep_earlier=True) as stage:
+        (stage / "detections.json").write_text("with models")
+        (stage / "object_map.ply").write_text("map")
+    assert (out / "labelled.ply").read_text() == "cloud"
+    assert (out / "detections.json").read_text() == "with models"
+    listed = set((out / RUN_MARKER).read_text().split())
+    assert listed == {"labelled.ply", "detections.json", "object_map.ply"}
+    with staged_folder(out) as stage:  # the earlier kind of run again: all of it replaced
+        (stage / "detections.json").write_text("new")
+    assert sorted(p.name for p in out.iterdir()) == [RUN_MARKER, "detections.json"]
+
+
+def test_an_output_folder_has_the_permissions_mkdir_gives(room, tmp_path):
+    out = tmp_path / "out"
+    assert _detect(room[0], out, "--no-picture") == 0
+    mask = os.umask(0)
+    os.umask(mask)
+    assert out.stat().st_mode & 0o777 == 0o777 & ~mask
+
+
 # ------------------------------------------------------------------------------------------
 # 2 (end). The part-assignment search: a branch and bound, same results as every combination
 

@@ -124,7 +124,11 @@ def main(argv: list[str] | None = None) -> int:
     old_show = warnings.showwarning
     warnings.showwarning = _show_warning
     try:
-        app(args=argv, prog_name="ontodetect", standalone_mode=False)
+        # Outside standalone mode Click returns a command's typer.Exit code instead of
+        # raising it: a batch with a failed scan exits with it.
+        code = app(args=argv, prog_name="ontodetect", standalone_mode=False)
+        if isinstance(code, int) and code:
+            return code
     except OntoDetectError as exc:
         _fail(str(exc), exc)
         return 2

@@ -81,7 +81,8 @@ def fit(
         )
         for det, f in zip(doc["detections"], fits):
             det["cad"] = cad_dict(f)
-        with staged_folder(out, "output folder") as stage:
+        # Written beside the detect run's files when -o is its folder: they stay.
+        with staged_folder(out, "output folder", keep_earlier=True) as stage:
             write_detections(stage / "detections.json", doc)
             staged = write_object_map(fits, stage, spacing=spacing, seed=seed, glb=glb)
         js = out / "detections.json"

@@ -24,7 +24,7 @@ from ._common import (
     number_list,
     room_option,
 )
-from ._console import console, reporting, showing_progress, state
+from ._console import console, err_console, reporting, showing_progress, state
 from .env import scene_image_room
 
 
@@ -405,8 +405,8 @@ def _detect_many(inputs, out, *, executor, as_json, format, detect_options, **wr
         for r in rows:
             table.add_row(r["input"], str(r.get("objects", "failed")), r["out"])
         console.print(table)
-    for r in failed:
-        console.print(Text.assemble(("failed", "red"), f" {r['input']}: {r['error']}"))
+    for r in failed:  # on stderr: stdout holds the table or the JSON rows
+        err_console.print(Text.assemble(("failed", "red"), f" {r['input']}: {r['error']}"))
     if failed:
         raise typer.Exit(2)
 

@@ -134,17 +134,21 @@ def _run_files(folder: Path) -> set[str] | None:
     return {line for line in text.splitlines() if line}
 
 
-def _commit(stage: Path, out: Path, what: str) -> None:
+def _commit(stage: Path, out: Path, what: str, keep_earlier: bool = False) -> None:
     names = sorted(p.name for p in stage.iterdir())
-    (stage / RUN_MARKER).write_text("".join(f"{n}\n" for n in names), encoding="utf-8")
     if not out.exists() and not out.is_symlink():
+        _write_marker(stage, names)
         os.rename(stage, out)
         return
     if not out.is_dir() or out.is_symlink():
         raise WriteError(out, f"the {what} is not a folder")
     present = {p.name for p in out.iterdir()}
-    ours = _run_files(out)
-    if ours is not None and present <= ours | {RUN_MARKER}:
+    ours = _run_files(out) or set()
+    # With keep_earlier, an earlier run's files this run does not write stay, and the
+    # marker lists them too: the next run of the earlier kind replaces them all.
+    kept = sorted((ours & present) - set(names) - {RUN_MARKER}) if keep_earlier else []
+    _write_marker(stage, names + kept)
+    if not keep_earlier and ours and present <= ours | {RUN_MARKER}:
         # Only an earlier run's files: swap the folders. Killed between the two renames,
         # the next run puts the old folder back (_remove_stale).
         old = Path(tempfile.mkdtemp(prefix=f".{out.name}.old-", dir=out.parent))
@@ -154,28 +158,54 @@ def _commit(stage: Path, out: Path, what: str) -> None:
         shutil.rmtree(old, ignore_errors=True)
         return
     # A folder with other files too (the user's): replace our files one by one, checked
-    # first so that nothing is changed when one cannot be, and the marker last.
+    # first so that nothing is changed when one cannot be, and the marker last. A folder
+    # an earlier run wrote (an export) is ours to replace; any other is the user's.
+    for n in names:
+        target = out / n
+        if target.is_dir() and not target.is_symlink() and n not in ours:
+            raise WriteError(target, "a folder is in the way of this output file")
     for n in names:
         target = out / n
         if target.is_dir() and not target.is_symlink():
-            raise WriteError(target, "a folder is in the way of this output file")
-    for n in names:
-        os.replace(stage / n, out / n)
-    for n in sorted((ours or set()) - set(names) - {RUN_MARKER}):
-        with contextlib.suppress(OSError):
-            (out / n).unlink()
+            aside = Path(tempfile.mkdtemp(prefix=f".{n}.old-", dir=out))
+            os.rmdir(aside)
+            os.rename(target, aside)
+            os.replace(stage / n, target)
+            shutil.rmtree(aside, ignore_errors=True)
+        else:
+            os.replace(stage / n, target)
+    for n in sorted(ours - set(names) - set(kept) - {RUN_MARKER}):
+        _remove(out / n)
     os.replace(stage / RUN_MARKER, out / RUN_MARKER)
     shutil.rmtree(stage, ignore_errors=True)
 
 
+def _write_marker(stage: Path, names: list[str]) -> None:
+    (stage / RUN_MARKER).write_text("".join(f"{n}\n" for n in names), encoding="utf-8")
+
+
+def _remove(path: Path) -> None:
+    """An earlier run's file or folder, gone (quietly: it may already be)."""
+    if path.is_dir() and not path.is_symlink():
+        shutil.rmtree(path, ignore_errors=True)
+    else:
+        with contextlib.suppress(OSError):
+            path.unlink()
+
+
 @contextlib.contextmanager
-def staged_folder(path: str | os.PathLike[str], what: str = "output folder") -> Iterator[Path]:
+def staged_folder(
+    path: str | os.PathLike[str], what: str = "output folder", *, keep_earlier: bool = False
+) -> Iterator[Path]:
     """Write the files of one run into a staging folder beside ``path``; on success they
     replace ``path``'s as one unit, on any failure nothing in ``path`` has changed.
 
     A folder that holds only an earlier run's files (listed in its :data:`RUN_MARKER`) is
-    swapped whole; a folder with other files keeps them, and our files are replaced after
-    checking that each can be. Staging folders left by a killed run are removed first.
+    swapped whole; a folder with other files keeps them, and our files (and folders an
+    earlier run wrote) are replaced after checking that each can be. With
+    ``keep_earlier`` (a run that adds to an earlier one's results, such as CAD models
+    fitted to stored detections) the earlier run's other files stay. Staging folders left
+    by a killed run are removed first.
 
     Examples
     --------
@@ -196,8 +226,10 @@ def staged_folder(path: str | os.PathLike[str], what: str = "output folder") -> 
     except OSError as exc:
         raise WriteError(out, f"cannot create the {what} ({exc.strerror or exc})") from None
     try:
+        # mkdtemp makes the folder private; give it the permissions mkdir would.
+        os.chmod(stage, 0o777 & ~_umask())
         yield stage
-        _commit(stage, out, what)
+        _commit(stage, out, what, keep_earlier)
     except BaseException as exc:
         shutil.rmtree(stage, ignore_errors=True)
         if isinstance(exc, OSError) and not isinstance(exc, WriteError):
