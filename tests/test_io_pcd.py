@@ -22,6 +22,7 @@ from ontodetect import (
     read_cloud,
     write_cloud,
 )
+from ontodetect.cloud import pixel_grid
 from ontodetect.io import _pcd
 from ontodetect.io._pcd import read_pcd, write_pcd
 
@@ -284,6 +285,110 @@ def test_writer_keeps_organized_grid_and_viewpoint(tmp_path, rng):
     assert (c.meta["width"], c.meta["height"]) == (3, 1)
 
 
+def _header_line(path, key):
+    head = path.read_bytes().split(b"\nDATA ")[0].decode()
+    return next(line for line in head.splitlines() if line.startswith(key + " "))
+
+
+@pytest.mark.parametrize("data", ["binary", "ascii", "binary_compressed"])
+def test_map_coordinates_are_written_as_float64(tmp_path, rng, data):
+    """UTM-like coordinates: float32 steps there are 3 to 25 cm; float64 keeps them."""
+    xyz = rng.random((40, 3)) * 5 + [500000.123, 4000000.456, 10.0]
+    normals = rng.normal(size=(40, 3))
+    cloud = point_cloud(xyz, rgb=rng.integers(0, 256, (40, 3)), normals=normals)
+    f = write_cloud(tmp_path / "utm.pcd", cloud, data=data)
+    assert _header_line(f, "SIZE") == "SIZE 8 8 8 4 8 8 8"
+    assert _header_line(f, "TYPE") == "TYPE F F F F F F F"
+    got = read_cloud(f)
+    np.testing.assert_allclose(got.xyz, xyz, rtol=0, atol=1e-9)
+    np.testing.assert_array_equal(got.xyz, xyz)  # in fact exactly
+    np.testing.assert_array_equal(got.normals, cloud.normals)
+    np.testing.assert_array_equal(got.rgb, cloud.rgb)
+
+
+def test_room_coordinates_stay_float32(tmp_path, rng):
+    # float32 moves these by at most 2.4e-7 m: written as before, byte for byte.
+    cloud = point_cloud(rng.uniform(-4, 4, (30, 3)), normals=rng.normal(size=(30, 3)))
+    f = write_pcd(tmp_path / "room.pcd", cloud)
+    assert _header_line(f, "SIZE") == "SIZE 4 4 4 4 4 4"
+    assert f.read_bytes() == write_pcd(tmp_path / "f32.pcd", cloud, dtype="float32").read_bytes()
+    # Far from the origin but on float32's grid (a cloud read from a float32 file): float32.
+    on_grid = point_cloud([[500000.125, 4000000.5, 10.0], [500001.0, 4000000.0, 10.25]])
+    f = write_pcd(tmp_path / "grid.pcd", on_grid)
+    assert _header_line(f, "SIZE") == "SIZE 4 4 4"
+    np.testing.assert_array_equal(read_pcd(f).xyz, on_grid.xyz)
+    # An explicit dtype is obeyed.
+    f = write_pcd(tmp_path / "f64.pcd", cloud, dtype="float64")
+    assert _header_line(f, "SIZE") == "SIZE 8 8 8 8 8 8"
+
+
+def _frame(rng, width=20, height=15):
+    """A depth frame as a camera gives it: (width * height, 3) float32 points in pixel
+    order, NaN at the pixels with no depth (a block and some scattered ones)."""
+    col, row = np.meshgrid(np.arange(width), np.arange(height))
+    depth = 1.5 + 0.01 * rng.random((height, width))
+    xyz = np.stack([(col - 9.5) * depth / 50, (row - 7) * depth / 50, depth], -1).reshape(-1, 3)
+    missing = np.zeros((height, width), bool)
+    missing[2:5, 3:8] = True
+    missing.flat[rng.choice(width * height, 20, replace=False)] = True
+    xyz[missing.reshape(-1)] = np.nan
+    return xyz.astype(np.float32), np.flatnonzero(~missing.reshape(-1))
+
+
+@pytest.mark.parametrize("data", ["binary", "ascii", "binary_compressed"])
+def test_organized_frame_keeps_its_grid_through_read_and_write(tmp_path, rng, data):
+    width, height = 20, 15
+    xyz, kept = _frame(rng, width, height)
+    rgb = rng.integers(0, 256, (width * height, 3))
+    rec = np.zeros(width * height, [("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("rgb", "<u4")])
+    rec["x"], rec["y"], rec["z"] = xyz.T
+    rec["rgb"] = _pack(rgb[:, 0], rgb[:, 1], rgb[:, 2])
+    f = tmp_path / "frame.pcd"
+    head = _header("x y z rgb", "4 4 4 4", "F F F U", width, height, "binary")
+    f.write_bytes(head + rec.tobytes())
+    first = read_cloud(f)
+    assert first.index.tolist() == kept.tolist()
+    frame = first.with_fields(label=np.arange(len(first), dtype=np.uint16))
+    again = read_cloud(write_cloud(tmp_path / "again.pcd", frame, data=data))
+    assert _header_line(tmp_path / "again.pcd", "WIDTH") == "WIDTH 20"
+    assert _header_line(tmp_path / "again.pcd", "HEIGHT") == "HEIGHT 15"
+    assert _header_line(tmp_path / "again.pcd", "POINTS") == "POINTS 300"
+    assert (again.meta["width"], again.meta["height"], again.meta["organized"]) == (20, 15, True)
+    assert again.index.tolist() == kept.tolist()
+    pixels, w, h = pixel_grid(again)
+    assert (pixels.tolist(), w, h) == (kept.tolist(), width, height)
+    np.testing.assert_array_equal(again.xyz, xyz[kept].astype(np.float64))
+    np.testing.assert_array_equal(again.rgb, rgb[kept])
+    np.testing.assert_array_equal(again.fields["label"], np.arange(len(kept)))
+    assert again.meta["viewpoint"] == [0, 0, 0, 1, 0, 0, 0]
+
+
+def test_organized_frame_in_any_point_order_is_written_in_pixel_order(tmp_path, rng):
+    xyz, kept = _frame(rng)
+    frame = point_cloud(xyz[kept], index=kept, meta={"organized": True, "width": 20, "height": 15})
+    shuffled = frame.select(rng.permutation(len(frame)))
+    f = write_pcd(tmp_path / "s.pcd", shuffled, data="ascii")
+    body = f.read_bytes().split(b"DATA ascii\n")[1].decode().splitlines()
+    assert len(body) == 300
+    assert [i for i, line in enumerate(body) if not line.startswith("nan")] == kept.tolist()
+    again = read_pcd(f)
+    assert again.index.tolist() == kept.tolist()
+    np.testing.assert_array_equal(again.xyz, frame.xyz)
+
+
+def test_frame_whose_points_share_pixels_is_written_unorganized(tmp_path, rng):
+    xyz, kept = _frame(rng)
+    frame = point_cloud(xyz[kept], index=kept, meta={"organized": True, "width": 20, "height": 15})
+    doubled = frame.select([0, 0, 1])  # two points on one pixel: no longer a grid
+    c = read_pcd(write_pcd(tmp_path / "d.pcd", doubled))
+    assert (c.meta["width"], c.meta["height"], c.meta["organized"]) == (3, 1, False)
+    np.testing.assert_array_equal(c.xyz, doubled.xyz)
+    # Points left out (a crop) keep their pixels: still the frame, with more NaN pixels.
+    crop = read_pcd(write_pcd(tmp_path / "c.pcd", frame.select(np.arange(0, len(frame), 2))))
+    assert (crop.meta["width"], crop.meta["height"]) == (20, 15)
+    assert crop.index.tolist() == kept[::2].tolist()
+
+
 def test_writer_header_and_open3d_reads_it(tmp_path, rng):
     cloud = point_cloud(
         rng.normal(size=(50, 3)),
@@ -306,7 +411,7 @@ def test_writer_refusals(tmp_path):
     with pytest.raises(InvalidParameterError, match="'data' parameter"):
         write_pcd(tmp_path / "a.pcd", cloud, data="zip")
     with pytest.raises(WriteError, match="beyond float32"):
-        write_pcd(tmp_path / "a.pcd", point_cloud([[1e300, 0, 0]]))
+        write_pcd(tmp_path / "a.pcd", point_cloud([[1e300, 0, 0]]), dtype="float32")
     with pytest.raises(WriteError, match="shape"):
         write_pcd(tmp_path / "a.pcd", cloud.with_fields(h=np.zeros((2, 0))))
     assert os.listdir(tmp_path) == []
@@ -408,7 +513,8 @@ def test_errors_name_the_file_and_the_problem(tmp_path, content, message):
 @given(cloud=clouds())
 def test_roundtrip_float32(tmp_path_factory, data, cloud):
     f = tmp_path_factory.mktemp("pcd") / "c.pcd"
-    assert_same_cloud(read_cloud(write_cloud(f, cloud, data=data)), cloud, np.float32)
+    got = read_cloud(write_cloud(f, cloud, data=data, dtype="float32"))
+    assert_same_cloud(got, cloud, np.float32)
 
 
 @pytest.mark.parametrize("data", ["binary", "ascii", "binary_compressed"])

@@ -18,6 +18,10 @@ An organized cloud (``HEIGHT > 1``, a depth camera frame) marks missing depth
 with NaN coordinates: those points are dropped silently and ``index`` keeps the
 row-major grid position (``row * WIDTH + column``) of every point kept. ``meta``
 records ``width``, ``height``, ``organized``, ``viewpoint`` and ``pcd_data``.
+
+The writer puts such a frame back on its grid (NaN where a pixel has no point), and
+stores coordinates as float32, as PCL does, unless that would move them by more
+than :data:`FLOAT32_TOLERANCE` (a cloud in map coordinates): then as float64.
 """
 
 from __future__ import annotations
@@ -34,11 +38,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._progress import progress
-from ..cloud import PointCloud
+from ..cloud import PointCloud, pixel_grid
 from ..errors import CorruptFileError, InvalidParameterError, ReadError, WriteError
 from ._budget import check_bytes, check_points
 from ._ply import (
     HEADER_MAX_BYTES,
+    WRITE_CHUNK_ROWS,
     Column,
     ColumnPlan,
     ascii_table,
@@ -67,6 +72,12 @@ LZF_MAX_BYTES = 2**32 - 1
 DEFAULT_VIEWPOINT = (0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0)
 #: Encodings of the points named on the ``DATA`` line.
 ENCODINGS = ("ascii", "binary", "binary_compressed")
+#: Largest change (in the cloud's units, metres as a rule) that storing coordinates and
+#: normals as float32 may make; beyond it the writer chooses float64. Far below any
+#: scan's noise, and above float32's rounding in a frame a few hundred metres across,
+#: so room-scale clouds keep PCL's float32 while map coordinates (UTM: float32 steps of
+#: 3 to 50 cm) keep every digit.
+FLOAT32_TOLERANCE = 1e-5
 
 _TYPES = {
     ("F", 4): "f4",
@@ -563,7 +574,49 @@ def _pack_rgb(rgb: NDArray[np.uint8]) -> NDArray[np.float32]:
     return packed.astype("<u4").view("<f4")
 
 
-def _grid(cloud: PointCloud) -> tuple[int, int]:
+def _float32_keeps(values: NDArray[np.float64]) -> bool:
+    """True when float32 stores every value within :data:`FLOAT32_TOLERANCE`.
+
+    NaN and infinities count as kept (float32 holds them); a value beyond the
+    float32 range becomes infinite, which does not.
+    """
+    for start in range(0, len(values), WRITE_CHUNK_ROWS):
+        block = values[start : start + WRITE_CHUNK_ROWS]
+        with np.errstate(over="ignore", invalid="ignore"):
+            moved = np.abs(block.astype(np.float32).astype(np.float64) - block)
+            if np.any(moved > FLOAT32_TOLERANCE):
+                return False
+    return True
+
+
+def _coordinate_type(path: Path, cloud: PointCloud, dtype: Any) -> np.dtype:
+    """Little-endian type of coordinates and normals: ``dtype``, or when it is None,
+    float32 unless that loses more than :data:`FLOAT32_TOLERANCE`."""
+    if dtype is None:
+        arrays = [cloud.xyz] if cloud.normals is None else [cloud.xyz, cloud.normals]
+        dtype = np.float32 if all(_float32_keeps(a) for a in arrays) else np.float64
+    kind = coordinate_dtype(dtype).newbyteorder("<")
+    if kind.itemsize == 4:
+        check_float32_range(path, "xyz", cloud.xyz)
+        if cloud.normals is not None:
+            check_float32_range(path, "normals", cloud.normals)
+    return kind
+
+
+def _grid(cloud: PointCloud) -> tuple[int, int, NDArray[np.int64] | None]:
+    """WIDTH, HEIGHT and, when points must move to their pixels, the pixel of each.
+
+    A frame whose points each have a pixel of their own (:func:`pixel_grid`; a frame
+    read from an organized PCD lost its NaN pixels) goes back on its grid. Else a
+    ``meta`` grid that the points fill exactly is kept as it is; anything else (a
+    grid that no longer fits the points) is written unorganized.
+    """
+    grid = pixel_grid(cloud)
+    if grid is not None:
+        pixels, width, height = grid
+        if np.bincount(pixels, minlength=width * height).max() == 1:
+            full = len(pixels) == width * height and bool(np.all(np.diff(pixels) == 1))
+            return width, height, None if full else pixels
     width, height = cloud.meta.get("width"), cloud.meta.get("height")
     if (
         isinstance(width, int)
@@ -571,8 +624,15 @@ def _grid(cloud: PointCloud) -> tuple[int, int]:
         and height > 1
         and width * height == len(cloud)
     ):
-        return width, height
-    return len(cloud), 1
+        return width, height, None
+    return len(cloud), 1, None
+
+
+def _on_grid(values: NDArray[Any], pixels: NDArray[np.int64], size: int, fill: Any) -> NDArray[Any]:
+    """(size, ...) array with ``values`` at rows ``pixels`` and ``fill`` elsewhere."""
+    out = np.full((size, *values.shape[1:]), fill, dtype=values.dtype)
+    out[pixels] = values
+    return out
 
 
 def _viewpoint(cloud: PointCloud) -> tuple[float, ...]:
@@ -604,9 +664,7 @@ def _write_compressed(path: Path, fh: IO[bytes], columns: list[Column]) -> None:
     fh.write(packed)
 
 
-def write_pcd(
-    path: Path, cloud: PointCloud, *, data: str = "binary", dtype: Any = "float32"
-) -> Path:
+def write_pcd(path: Path, cloud: PointCloud, *, data: str = "binary", dtype: Any = None) -> Path:
     """Write a cloud as a PCL ``.pcd`` file, atomically.
 
     Parameters
@@ -617,14 +675,18 @@ def write_pcd(
         Points; colours are written as PCL's packed float ``rgb`` (alpha 0);
         normals as ``normal_x normal_y normal_z``; every field with its own type,
         an (n, k) field as one field with ``COUNT k`` (so an (n, 1) field reads
-        back as (n,)). A cloud whose ``meta``
-        holds a ``width`` x ``height`` grid (height > 1) matching its size is
-        written organized, with its ``viewpoint``.
+        back as (n,)). An organized frame (:func:`~ontodetect.cloud.pixel_grid`,
+        each point on a pixel of its own) is written on its ``width`` x
+        ``height`` grid in pixel order, with NaN coordinates and normals, zero
+        colours and fields where a pixel has no point, and its ``viewpoint``;
+        so is a cloud whose ``meta`` grid (height > 1) matches its size.
     data : {"binary", "ascii", "binary_compressed"}
         Encoding of the points.
-    dtype : {"float32", "float64"}
-        Type of coordinates and normals. PCL's point types use float32, the
-        default; choose float64 to keep coordinates exactly.
+    dtype : {"float32", "float64"}, optional
+        Type of coordinates and normals. By default float32, as in PCL's point
+        types, unless that would move a value by more than
+        :data:`FLOAT32_TOLERANCE` (coordinates far from the origin), in which
+        case float64, which keeps them exactly.
 
     Returns
     -------
@@ -650,24 +712,27 @@ def write_pcd(
         raise WriteError(path, f"expected a PointCloud, got {type(cloud).__name__}")
     if data not in ENCODINGS:
         raise InvalidParameterError("data", "one of 'ascii', 'binary', 'binary_compressed'", data)
-    kind = coordinate_dtype(dtype).newbyteorder("<")
-    if kind.itemsize == 4:
-        check_float32_range(path, "xyz", cloud.xyz)
-        if cloud.normals is not None:
-            check_float32_range(path, "normals", cloud.normals)
-    columns: list[Column] = [(c, kind, cloud.xyz[:, i]) for i, c in enumerate("xyz")]
-    if cloud.rgb is not None:
-        columns.append(("rgb", np.dtype("<f4"), _pack_rgb(cloud.rgb)))
-    if cloud.normals is not None:
+    kind = _coordinate_type(path, cloud, dtype)
+    width, height, pixels = _grid(cloud)
+    xyz, rgb, normals, fields = cloud.xyz, cloud.rgb, cloud.normals, dict(cloud.fields)
+    if pixels is not None:
+        # Missing pixels as PCL stores them: NaN points (readers drop them).
+        size = width * height
+        xyz = _on_grid(xyz, pixels, size, np.nan)
+        rgb = None if rgb is None else _on_grid(rgb, pixels, size, 0)
+        normals = None if normals is None else _on_grid(normals, pixels, size, np.nan)
+        fields = {name: _on_grid(np.asarray(v), pixels, size, 0) for name, v in fields.items()}
+    columns: list[Column] = [(c, kind, xyz[:, i]) for i, c in enumerate("xyz")]
+    if rgb is not None:
+        columns.append(("rgb", np.dtype("<f4"), _pack_rgb(rgb)))
+    if normals is not None:
         columns += [
-            (c, kind, cloud.normals[:, i])
-            for i, c in enumerate(("normal_x", "normal_y", "normal_z"))
+            (c, kind, normals[:, i]) for i, c in enumerate(("normal_x", "normal_y", "normal_z"))
         ]
     columns += field_columns(
-        path, cloud.fields, allow_64bit=True, split=False, taken=[name for name, _, _ in columns]
+        path, fields, allow_64bit=True, split=False, taken=[name for name, _, _ in columns]
     )
-    n = len(cloud)
-    width, height = _grid(cloud)
+    n = width * height
     types = [_CODES[k.str[1:]] for _, k, _ in columns]
     header = "\n".join(
         [
