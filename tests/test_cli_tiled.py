@@ -29,6 +29,13 @@ def test_detect_by_tiles_writes_the_contract_and_the_tiles(floor, tmp_path, caps
     assert all(d["tile"] in ("tile_0_0", "tile_0_1") for d in doc["detections"])
     assert [d["id"] for d in doc["detections"]] == list(range(1, len(doc["detections"]) + 1))
     assert (out / "boxes.txt").exists() and printed["files"][0].endswith("detections.json")
+    # What differs from run to run is in timings.json, not in the contract.
+    assert not {"seconds", "peak_rss", "worker"} & set(doc["tiling"]["tiles"][0])
+    runs = json.loads((out / "timings.json").read_text())["tile_runs"]
+    assert [t["name"] for t in runs] == ["tile_0_0", "tile_0_1"] and runs[0]["peak_rss"] > 0
+    again = tmp_path / "again"
+    assert main([*args[:3], str(again), *args[4:], "-q"]) == 0
+    assert (again / "detections.json").read_bytes() == (out / "detections.json").read_bytes()
 
 
 @pytest.mark.parametrize(

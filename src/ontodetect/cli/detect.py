@@ -431,7 +431,8 @@ def _detect_with_rows(fn, units, pool, names) -> list[dict]:
 
 def _detect_tiled(path, out, *, tile, overlap, executor, as_json, format, exports, detect_options):
     """``detect --tile``: one large scan tile by tile; detections.json and the exports."""
-    from ..io import export_detections, make_folder, write_detections  # lazy: CLI start-up
+    from ..io import export_detections, write_detections  # lazy: CLI start-up
+    from ..io._atomic import atomic_write_text, staged_folder  # lazy: CLI start-up
     from ..pipeline import detect_tiled  # lazy: CLI start-up
 
     with reporting(), executor_option(*executor) as pool:
@@ -439,9 +440,13 @@ def _detect_tiled(path, out, *, tile, overlap, executor, as_json, format, export
             path, tile=tile, overlap=overlap, executor=pool, format=format, **detect_options
         )
     doc = result.to_dict()
-    make_folder(out)
-    written = [write_detections(out / "detections.json", doc)]
-    written += export_detections(out, doc, exports)
+    contract, timings = _tiled_timings(doc)
+    with staged_folder(out, "output folder") as stage:
+        write_detections(stage / "detections.json", contract)
+        atomic_write_text(stage / "timings.json", json.dumps(timings, indent=2) + "\n")
+        exported = export_detections(stage, contract, exports)
+    written = [out / "detections.json", out / "timings.json"]
+    written += [out / p.relative_to(stage) for p in exported]
     if as_json:
         doc["files"] = [str(p) for p in written]
         typer.echo(json.dumps(jsonable(doc)))
@@ -462,6 +467,29 @@ def _detect_tiled(path, out, *, tile, overlap, executor, as_json, format, export
     if by_label:
         console.print(", ".join(f"{n} {label}" for label, n in sorted(by_label.items())))
     console.print("wrote " + ", ".join(str(p) for p in written))
+
+
+#: What a tile's row in detections.json says of the run rather than of the scan: it goes
+#: to timings.json, so that the same input and seed write the same detections.json.
+TILE_RUN_KEYS = ("seconds", "peak_rss", "worker")
+
+
+def _tiled_timings(doc: dict) -> tuple[dict, dict]:
+    """A tiled run's document split into the contract (detections.json) and what
+    differs from run to run (timings.json: the stages' seconds, each tile's seconds,
+    peak memory and worker)."""
+    tiling = dict(doc["tiling"])
+    tiling["tiles"] = [
+        {k: v for k, v in t.items() if k not in TILE_RUN_KEYS} for t in doc["tiling"]["tiles"]
+    ]
+    contract = {k: v for k, v in doc.items() if k != "timings"} | {"tiling": tiling}
+    timings = dict(doc.get("timings", {})) | {
+        "tile_runs": [
+            {"name": t["name"], **{k: t[k] for k in TILE_RUN_KEYS if k in t}}
+            for t in doc["tiling"]["tiles"]
+        ]
+    }
+    return contract, timings
 
 
 def _ballot_line(b: dict) -> str:
