@@ -62,6 +62,12 @@ def test_segment_writes_ply_and_json(scan, tmp_path, capsys):
     # Points stay in the input frame: the floor is still at z = -0.3.
     assert cloud.xyz[:, 2].min() == pytest.approx(-0.3, abs=0.01)
     assert "clusters" in captured.out and "wrote" in captured.out
+    # Seconds go to timings.json: the same input and seed write the same planes.json.
+    assert "timings" not in data["prepare"]
+    assert json.loads((out / "timings.json").read_text())
+    again = tmp_path / "again"
+    assert main(["-q", "segment", str(path), "-o", str(again), "--set", "cluster.radius=0.04"]) == 0
+    assert (again / "planes.json").read_bytes() == js.read_bytes()
 
 
 def test_config_file_and_verbose(scan, tmp_path, capsys):

@@ -148,6 +148,32 @@ def test_output_where_detections_json_is_a_folder(room, tmp_path, capsys):
     one_line(capsys, _detect(room[0], out, "--no-picture"), "detections.json")
 
 
+@pytest.mark.parametrize("command", ["detect", "segment"])
+def test_an_output_folder_that_is_a_file_is_refused_before_any_work(
+    room, tmp_path, capsys, monkeypatch, command
+):
+    import ontodetect.io as io
+
+    def no_reading(*args, **kwargs):
+        raise AssertionError("the scan was read before the output folder was checked")
+
+    monkeypatch.setattr(io, "read_cloud", no_reading)
+    monkeypatch.setattr(f"ontodetect.cli.{command}.read_cloud", no_reading)
+    (tmp_path / "afile").write_text("")
+    status = main([command, str(room[0]), "-o", str(tmp_path / "afile")])
+    one_line(capsys, status, "afile", "is a file, not a folder")
+    status = main([command, str(room[0]), "-o", str(tmp_path / "afile" / "below")])
+    one_line(capsys, status, "below", "is a file")
+
+
+@pytest.mark.parametrize(
+    ("option", "value"), [("--workers", "-2"), ("--jobs", "-1"), ("--scheduler", "foo")]
+)
+def test_executor_options_are_checked_for_one_scan_too(room, tmp_path, capsys, option, value):
+    one_line(capsys, _detect(room[0], tmp_path / "o", option, value), f"'{option}'", value)
+    assert not (tmp_path / "o").exists()
+
+
 def test_negative_seed(room, tmp_path, capsys):
     one_line(capsys, _detect(room[0], tmp_path / "o", "--seed", "-1"), "'seed'", "-1")
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -96,19 +98,41 @@ SCHEDULER_HELP = (
 WORKERS_HELP = "Run on a local Dask cluster of N worker processes (one thread each)."
 
 
+#: The commands' names of the executor's parameters, for their errors.
+EXECUTOR_OPTIONS = {"scheduler": "--scheduler", "workers": "--workers", "jobs": "--jobs"}
+
+
+def check_executor_options(scheduler: str | None, workers: int | None, jobs: int | None) -> None:
+    """Before any work: ``--scheduler``, ``--workers`` and ``--jobs`` are well formed,
+    whether or not the run needs an executor (one scan uses none); errors name the option."""
+    from .._executor import scheduler_address  # lazy: CLI start-up
+    from ..config import COUNT, Nullable, check_param  # lazy: CLI start-up
+
+    if scheduler is not None and workers is not None:
+        raise InvalidParameterError("--workers", "not combined with --scheduler", workers)
+    with _executor_option_names():
+        scheduler_address(scheduler)
+        check_param("workers", Nullable(COUNT), workers)
+        check_param("jobs", Nullable(COUNT), jobs)
+
+
 def executor_option(scheduler: str | None, workers: int | None, jobs: int | None = None) -> Any:
     """The executor ``--scheduler``, ``--workers`` or ``--jobs`` ask for (an open one: use
     it in a ``with`` block); errors name the option."""
     from .._executor import open_executor  # lazy: CLI start-up (Dask loads when asked for)
 
-    if scheduler is not None and workers is not None:
-        raise InvalidParameterError("--workers", "not combined with --scheduler", workers)
-    try:
+    check_executor_options(scheduler, workers, jobs)
+    with _executor_option_names():
         return open_executor(scheduler, workers=workers, jobs=jobs)
+
+
+@contextlib.contextmanager
+def _executor_option_names() -> Iterator[None]:
+    """The executor's parameter errors, named by the commands' options."""
+    try:
+        yield
     except InvalidParameterError as exc:
-        option = {"scheduler": "--scheduler", "workers": "--workers", "jobs": "--jobs"}.get(
-            exc.name
-        )
+        option = EXECUTOR_OPTIONS.get(exc.name)
         if option is None:
             raise
         raise InvalidParameterError(option, exc.rule, exc.value) from None

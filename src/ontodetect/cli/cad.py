@@ -10,7 +10,7 @@ import typer
 from rich.table import Table
 
 from ..errors import InvalidParameterError
-from ..io import atomic_write, read_cloud, staged_folder
+from ..io import atomic_write, check_output_folder, read_cloud, staged_folder
 from ..io._detections import read_detections, write_detections
 from . import app
 from ._console import console, reporting, state
@@ -72,6 +72,7 @@ def fit(
     """Fit models to stored detections; write detections.json (with cad) and the object map."""
     from ..cad import cad_dict, fit_document, write_object_map  # lazy: CLI start-up
 
+    check_output_folder(out)  # before any work
     lib = load_library(models, models_only)
     doc = read_detections(detections)
     with reporting():

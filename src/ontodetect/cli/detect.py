@@ -13,11 +13,12 @@ from rich.text import Text
 from ..cloud import as_position
 from ..errors import OntoDetectError
 from ..geometry import jsonable
-from ..io import expand_inputs, read_cloud
+from ..io import check_output_folder, expand_inputs, read_cloud
 from . import app
 from ._common import (
     SCHEDULER_HELP,
     WORKERS_HELP,
+    check_executor_options,
     executor_option,
     load_config,
     load_ontology_option,
@@ -198,6 +199,8 @@ def detect(
     if explain_ is not None and explain_ != "all":
         explain_classes = [n.strip() for n in explain_.split(",") if n.strip()]
     check_output_options(labelled_format.lower(), exports)
+    check_output_folder(out)  # before any work, not after the detection
+    check_executor_options(scheduler, workers, jobs)
     cfg = load_config(
         config,
         set_,

@@ -10,7 +10,7 @@ import numpy as np
 import typer
 from rich.table import Table
 
-from ..io import atomic_write_text, read_cloud, write_cloud
+from ..io import atomic_write_text, check_output_folder, read_cloud, staged_folder, write_cloud
 from . import app
 from ._common import load_config
 from ._console import console, reporting, state
@@ -35,8 +35,9 @@ def cluster_colors(labels: np.ndarray, seed: int = 0) -> np.ndarray:
 
 def write_segmentation(seg: Segmentation, out: Path) -> tuple[Path, Path]:
     """Write ``segments.ply`` (input points coloured by cluster, fields ``cluster`` and
-    ``plane``) and ``planes.json`` (clusters, planes, relations, configuration)."""
-    out.mkdir(parents=True, exist_ok=True)
+    ``plane``), ``planes.json`` (clusters, planes, relations, configuration) and
+    ``timings.json`` (the preparation's seconds per stage, which differ from run to run:
+    planes.json does not), as one unit (:func:`~ontodetect.io.staged_folder`)."""
     labels = seg.labels_per_point()
     planes = seg.planes_per_point()
     source = seg.prepared.cloud
@@ -51,11 +52,14 @@ def write_segmentation(seg: Segmentation, out: Path) -> tuple[Path, Path]:
             "plane": planes.astype(np.int32),
         },
     )
-    ply = write_cloud(out / "segments.ply", cloud)
-    js = out / "planes.json"
     # Point lists live in segments.ply; the JSON stays small enough to read.
-    atomic_write_text(js, json.dumps(seg.to_dict(with_points=False), indent=1))
-    return ply, js
+    doc = seg.to_dict(with_points=False)
+    timings = doc["prepare"].pop("timings", {})
+    with staged_folder(out, "output folder") as stage:
+        write_cloud(stage / "segments.ply", cloud)
+        atomic_write_text(stage / "planes.json", json.dumps(doc, indent=1))
+        atomic_write_text(stage / "timings.json", json.dumps(timings, indent=2) + "\n")
+    return out / "segments.ply", out / "planes.json"
 
 
 @app.command()
@@ -83,6 +87,7 @@ def segment(
     from ..segment import segment as run_segment  # lazy: CLI start-up
 
     cfg = load_config(config, set_)
+    check_output_folder(out)  # before any work
     with reporting():
         cloud = read_cloud(path, format=format)
         seg = run_segment(cloud, cfg, seed=seed, up=up, scale=scale)

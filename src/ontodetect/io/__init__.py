@@ -33,6 +33,7 @@ from ._atomic import (
     atomic_write,
     atomic_write_bytes,
     atomic_write_text,
+    check_output_folder,
     make_folder,
     staged_folder,
 )
@@ -68,6 +69,7 @@ __all__ = [
     "atomic_write",
     "atomic_write_bytes",
     "atomic_write_text",
+    "check_output_folder",
     "detect_format",
     "detections_schema",
     "expand_inputs",

@@ -19,6 +19,7 @@ __all__ = [
     "atomic_write",
     "atomic_write_bytes",
     "atomic_write_text",
+    "check_output_folder",
     "make_folder",
     "staged_folder",
 ]
@@ -43,6 +44,36 @@ def make_folder(path: str | os.PathLike[str], what: str = "folder") -> Path:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise WriteError(out, f"cannot create the {what} ({exc.strerror})") from exc
+    return out
+
+
+def check_output_folder(path: str | os.PathLike[str], what: str = "output folder") -> Path:
+    """Before any work: ``path`` is a folder or can become one, and the runs that write
+    it can (the folder it is made in, where a run stages its files, and the folder itself
+    when it exists are writable); a WriteError names it otherwise.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> base = pathlib.Path(tempfile.mkdtemp())
+    >>> check_output_folder(base / "new" / "out") == base / "new" / "out"
+    True
+    >>> (base / "f").write_text("")
+    0
+    >>> check_output_folder(base / "f")
+    Traceback (most recent call last):
+    ...
+    ontodetect.errors.WriteError: ...f: the output folder is a file, not a folder
+    """
+    out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise WriteError(out, f"the {what} is a file, not a folder")
+    above = next((p for p in out.parents if p.exists()), Path("."))
+    if not above.is_dir():
+        raise WriteError(out, f"cannot create the {what}: {str(above)!r} is a file")
+    for folder in (out, above) if out.exists() else (above,):
+        if not os.access(folder, os.W_OK | os.X_OK):
+            raise WriteError(out, f"cannot write the {what} (permission denied on {str(folder)!r})")
     return out
 
 
