@@ -110,12 +110,16 @@ def test_detect_missing_input(tmp_path, capsys):
     assert "nope.ply: no such file" in capsys.readouterr().err
 
 
-def test_detect_with_cad_adds_poses_and_the_object_map(scene, tmp_path):
+def test_detect_with_cad_adds_poses_and_the_object_map(scene, tmp_path, capsys):
     out = tmp_path / "cad"
-    assert (
-        main(["-q", "detect", str(scene / "cloud.ply"), "-o", str(out), "--cad", "--no-picture"])
-        == 0
-    )
+    assert main(["detect", str(scene / "cloud.ply"), "-o", str(out), "--cad", "--no-picture"]) == 0
+    # The last line names every file written, each with its folder.
+    wrote = " ".join(capsys.readouterr().out.split()).split("wrote ")[-1]
+    object_map = ("object_map.ply", "object_map.glb", "object_map_mesh.ply")
+    assert wrote.split(", ") == [
+        str(out / name) for name in ("detections.json", "labelled.ply", "boxes.txt", *object_map)
+    ]
+    assert all((out / name).is_file() for name in object_map)
     doc = json.loads((out / "detections.json").read_text())
     assert doc["detections"]
     for d in doc["detections"]:

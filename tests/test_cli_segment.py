@@ -87,7 +87,7 @@ def test_config_file_and_verbose(scan, tmp_path, capsys):
         (["--set", "cluster.radius=-1"], "'cluster.radius' parameter must be a float"),
         (["--set", "cluster.radiuss=1"], "unknown configuration key 'cluster.radiuss'"),
         (["--set", "radius"], "section.key=value"),
-        (["--up", "w"], "'up' parameter"),
+        (["--up", "w"], "'--up' parameter must be one of 'z', '-z', 'y', '-y', 'x', '-x', 'auto'"),
     ],
 )
 def test_bad_options_exit_2(scan, tmp_path, capsys, args, message):

@@ -11,13 +11,15 @@ import io
 import json
 import os
 import struct
+import warnings
 import zipfile
 
 import numpy as np
 import pytest
 
 from ontodetect.cli import main
-from ontodetect.io import write_cloud
+from ontodetect.cloud import DataWarning
+from ontodetect.io import read_cloud, write_cloud
 from ontodetect.synth import synthesize
 
 ONTOLOGY_HEAD = "format: ontodetect.ontology/1\nclasses:\n"
@@ -140,6 +142,75 @@ def test_a_folder_where_a_file_is_expected(tmp_path, capsys):
     folder = tmp_path / "x.ply"
     folder.mkdir()
     one_line(capsys, main(["info", str(folder)]), "x.ply")
+
+
+@pytest.mark.parametrize("suffix", ["npy", "ply"])
+def test_a_cloud_of_nan_points_only_is_one_error_and_no_warning(tmp_path, capsys, suffix):
+    f = tmp_path / f"nan.{suffix}"
+    if suffix == "npy":
+        np.save(f, np.full((3000, 3), np.nan))
+    else:
+        f.write_text(
+            "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+            "property float z\nend_header\nnan nan nan\nnan 0 0\n"
+        )
+    n = 3000 if suffix == "npy" else 2
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")  # shown as a user's run shows them, not raised
+        status = main(["detect", str(f), "-o", str(tmp_path / "o")])
+    line = one_line(capsys, status, f"nan.{suffix}")
+    assert line == f"error: {f}: contains no points with finite coordinates (of {n})"
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_cloud_with_some_finite_points_still_warns_of_the_others(tmp_path):
+    f = tmp_path / "half.npy"
+    np.save(f, np.array([[0.0, 0, 0], [np.nan, 0, 0], [1, 2, 3]]))
+    with pytest.warns(DataWarning, match="dropped 1 of 3 points"):
+        assert len(read_cloud(f)) == 2
+
+
+@pytest.mark.parametrize("encoding", ["ascii", "binary_little_endian"])
+def test_a_ply_whose_x_is_a_list_property(tmp_path, capsys, encoding):
+    f = tmp_path / "l.ply"
+    head = (
+        f"ply\nformat {encoding} 1.0\nelement vertex 2\nproperty list uchar float x\n"
+        "property float y\nproperty float z\nend_header\n"
+    )
+    if encoding == "ascii":
+        body = b"1 0 0 0\n1 1 1 1\n"
+    else:
+        body = struct.pack("<Bfff", 1, 0, 0, 0) + struct.pack("<Bfff", 1, 1, 1, 1)
+    f.write_bytes(head.encode() + body)
+    line = one_line(capsys, main(["info", str(f)]), "l.ply")
+    assert line == (
+        f"error: {f}: element 'vertex': property 'x' is a list, which is not supported for "
+        "coordinates (x, y and z must be scalar properties)"
+    )
+
+
+def test_an_npy_with_a_damaged_header_is_one_plain_line(tmp_path, capsys):
+    f = tmp_path / "hdr.npy"
+    np.save(f, np.zeros((10, 3)))
+    data = bytearray(f.read_bytes())
+    at = data.index(b"'descr'")
+    data[at : at + 7] = b"#$%^&*("  # garbage over a key of the header's dictionary
+    f.write_bytes(bytes(data))
+    line = one_line(capsys, main(["info", str(f)]), "hdr.npy")
+    assert line == f"error: {f}: unreadable .npy header (SyntaxError)"
+
+
+@pytest.mark.parametrize("command", ["detect", "segment"])
+def test_a_bad_up_axis_lists_every_value_up_takes(tmp_path, capsys, command):
+    f = tmp_path / "scan.npy"
+    np.save(f, np.zeros((10, 3)))
+    out = tmp_path / "o"
+    line = one_line(capsys, main([command, str(f), "-o", str(out), "--up", "q"]))
+    assert line == (
+        "error: The '--up' parameter must be one of 'z', '-z', 'y', '-y', 'x', '-x', "
+        "'auto', 'auto-frame'. Got 'q' instead."
+    )
+    assert not out.exists()  # refused before any work
 
 
 def test_output_where_detections_json_is_a_folder(room, tmp_path, capsys):

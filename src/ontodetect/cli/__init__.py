@@ -41,7 +41,13 @@ def _show_version(value: bool) -> None:
 
 @app.callback()
 def _global_options(
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="Print only results and errors."),
+    quiet: bool = typer.Option(
+        False,
+        "--quiet",
+        "-q",
+        help="No progress bars, tables or summaries (the files are written all the same); "
+        "errors, warnings and what info, --json and --explain print still appear.",
+    ),
     verbose: bool = typer.Option(False, "--verbose", "-v", help="Print more detail."),
     version: bool = typer.Option(
         False,

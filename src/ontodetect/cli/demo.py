@@ -8,7 +8,7 @@ import typer
 from rich.table import Table
 
 from . import app
-from ._console import console, reporting
+from ._console import console, reporting, state
 from ._defaults import DEMO_ROOM, DEMO_SEED
 
 
@@ -23,6 +23,8 @@ def demo(
 
     with reporting():
         d = run_demo(out, room=room, seed=seed)
+    if state.quiet:
+        return
     table = Table(title=f"simulated {room} (seed {seed}): {len(d.result.detections)} detections")
     for col in ("class", "truth", "detected", "correct", "precision", "recall"):
         table.add_column(col, justify="left" if col == "class" else "right")

@@ -186,6 +186,7 @@ def detect(
 ) -> None:
     """Detect objects; write detections.json, labelled.ply, boxes.txt and detections.png
     (and mesh.ply with --mesh)."""
+    from ..config import UP_CHOICES, OneOf, check_param  # lazy: CLI start-up
     from ..outputs import (  # lazy: CLI start-up
         check_explain_options,
         check_output_options,
@@ -201,6 +202,8 @@ def detect(
     check_output_options(labelled_format.lower(), exports)
     check_output_folder(out)  # before any work, not after the detection
     check_executor_options(scheduler, workers, jobs)
+    if up is not None:  # named as the option, not as the key it sets (prepare.up)
+        check_param("--up", OneOf(UP_CHOICES), up)
     cfg = load_config(
         config,
         set_,
@@ -271,7 +274,8 @@ def detect(
             viewpoint=eye,
             scene_rooms=scene_rooms,
         )
-        object_map = None
+        # The object map's files, written into the staging folder: their names, in OUT.
+        object_map: list[Path] = []
         if cad:
             from ..cad import fit_detections, write_object_map  # lazy: CLI start-up
             from ..pipeline import with_cad  # lazy: CLI start-up
@@ -280,7 +284,10 @@ def detect(
             result = with_cad(result, fits)
 
             def also(folder: Path) -> object:
-                return write_object_map(fits, folder, seed=seed)
+                staged = write_object_map(fits, folder, seed=seed)
+                written = (staged.points, staged.glb, staged.mesh)
+                object_map.extend(out / Path(p).name for p in written if p is not None)
+                return staged
         else:
             also = None
         files = write_outputs(
@@ -292,7 +299,6 @@ def detect(
             also=also,
             mesh=mesh,
         )
-        object_map = also
     if as_json:
         doc = result.to_dict()
         doc.pop("timings", None)
@@ -301,7 +307,7 @@ def detect(
             str(p)
             for p in (files.detections, files.labelled, *files.exports, files.picture, files.mesh)
             if p is not None
-        ] + (["object_map.ply", "object_map.glb"] if object_map is not None else [])
+        ] + [str(p) for p in object_map]
         if explain_ is not None:
             doc["explain"] = explain(result, classes=explain_classes, min_points=min_points)
         typer.echo(json.dumps(jsonable(doc)))
@@ -330,7 +336,7 @@ def detect(
         + "".join(f", {p}" for p in files.exports)
         + (f", {files.picture}" if files.picture else "")
         + (f", {files.mesh}" if files.mesh else "")
-        + (", object_map.ply, object_map.glb" if object_map is not None else "")
+        + "".join(f", {p}" for p in object_map)
     )
     if state.verbose:
         console.print(json.dumps(result.to_dict()["timings"]), soft_wrap=True)

@@ -3,70 +3,146 @@
 from __future__ import annotations
 
 import json
+from collections import Counter
 from pathlib import Path
+from typing import Any
 
 import typer
 from rich.table import Table
 
+from ..errors import InvalidParameterError, ReadError
 from ..io import read_cloud, supported_formats
+from ..io._labels import nyu40_name
+from ..io._layouts import DATASET_FORMATS, FORMAT_ALIASES
 from . import app
 from ._console import console, reporting
+
+#: Layouts of one scan per file, as named in ``--format`` (VoteNet's): a folder of them is a
+#: dataset, which ``ontodetect eval`` reads.
+SCAN_FILES = {"scannet-votenet": "*_vert.npy", "sunrgbd-votenet": "*_pc.npz"}
+
+
+def cloud_format(format: str | None) -> str | None:
+    """The reader ``--format`` names: one of :func:`~ontodetect.io.supported_formats`, or
+    a layout's other name in ``eval -f`` (``sunrgbd``, ``votenet``) when it names one.
+
+    Examples
+    --------
+    >>> cloud_format("sunrgbd"), cloud_format("PLY"), cloud_format(None)
+    ('sunrgbd-votenet', 'ply', None)
+    """
+    if format is None:
+        return None
+    name = format.strip().lower()
+    name = FORMAT_ALIASES.get(name, name)
+    readable = supported_formats()
+    if name in readable:
+        return name
+    rule = "one of " + ", ".join(readable) + " (info reads one cloud or scan)"
+    if name in DATASET_FORMATS:
+        rule += f"; {format!r} is a dataset layout: 'ontodetect eval -f {format}' reads it"
+    raise InvalidParameterError("--format", rule, format)
+
+
+def boxes_line(boxes: list[Any]) -> str:
+    """The ``boxes`` of a labelled scan in one line: their number and how many per class.
+
+    Rows of ``(K, 7)`` ScanNet boxes end in the NYU40 class id; SUN RGB-D boxes are
+    mappings with ``class_id``.
+
+    Examples
+    --------
+    >>> boxes_line([[0, 0, 0, 1, 1, 1, 5.0], [1, 1, 0, 1, 1, 1, 5.0], {"class_id": 7}])
+    '3 (2 chair [5], 1 table [7]; --json lists them)'
+    """
+    ids = Counter(int(b["class_id"] if isinstance(b, dict) else b[-1]) for b in boxes)
+    per_class = ", ".join(f"{n} {nyu40_name(c)} [{c}]" for c, n in sorted(ids.items()))
+    return f"{len(boxes)} ({per_class}; --json lists them)" if boxes else "0"
 
 
 @app.command()
 def info(
     path: Path = typer.Argument(..., help="Point cloud file or scan folder."),
     format: str | None = typer.Option(
-        None, "--format", "-f", help=f"Force a format: {', '.join(supported_formats())}."
+        None,
+        "--format",
+        "-f",
+        help=f"Force a format: {', '.join(supported_formats())} (sunrgbd and votenet name "
+        "the VoteNet layouts; 'ontodetect eval' reads a dataset folder).",
     ),
     as_json: bool = typer.Option(False, "--json", help="Print machine-readable JSON."),
 ) -> None:
     """Print number of points, fields, bounds, spacing, and guesses of units and up axis."""
     from ..summary import describe_cloud  # lazy: CLI start-up
 
+    fmt = cloud_format(format)
+    if fmt in SCAN_FILES and path.is_dir():
+        raise ReadError(
+            path,
+            f"is a folder, but info reads one scan of the {fmt!r} layout (a "
+            f"{SCAN_FILES[fmt]} file); 'ontodetect eval -f {format}' reads a dataset folder",
+        )
     with reporting():
-        cloud = read_cloud(path, format=format)
+        cloud = read_cloud(path, format=fmt)
     summary = describe_cloud(cloud)
     if as_json:
         typer.echo(json.dumps(summary.to_dict(), indent=2))
         return
-    table = Table(title=str(path), show_header=False, box=None, pad_edge=False)
-    table.add_column(style="bold")
-    table.add_column()
     fmt3 = lambda v: "  ".join(f"{x:.3f}" for x in v)  # noqa: E731
-    table.add_row("format", str(summary.format))
-    table.add_row("points", f"{summary.num_points:,}")
     attrs = (
         ["xyz"]
         + (["rgb"] if summary.has_colors else [])
         + (["normals"] if summary.has_normals else [])
         + summary.fields
     )
-    table.add_row("fields", ", ".join(attrs))
-    table.add_row("bounds min", fmt3(summary.bounds_min))
-    table.add_row("bounds max", fmt3(summary.bounds_max))
-    table.add_row("extent", fmt3(summary.extent))
-    table.add_row("point spacing", f"{summary.spacing:.4g} (median nearest neighbour)")
-    table.add_row("density", f"{summary.density:,.0f} points per square unit")
-    table.add_row("units (guess)", summary.units)
     tilt = f", tilted {summary.up_tilt:.1f}°" if summary.up_tilt >= 0.5 else ""
-    table.add_row(
-        "up axis (guess)",
-        f"{summary.up_axis}{tilt} (confidence {summary.up_confidence:.2f}): what "
-        "'detect --up auto' uses",
-    )
-    table.add_row(
-        "detect's up",
-        "auto (an organized or single-view cloud)"
-        if summary.up_default == "auto"
-        else "z (not a single view; --up auto to estimate it, --up -y... to name it)",
-    )
+    rows = [
+        ("format", str(summary.format)),
+        ("points", f"{summary.num_points:,}"),
+        ("fields", ", ".join(attrs)),
+        ("bounds min", fmt3(summary.bounds_min)),
+        ("bounds max", fmt3(summary.bounds_max)),
+        ("extent", fmt3(summary.extent)),
+        ("point spacing", f"{summary.spacing:.4g} (median nearest neighbour)"),
+        ("density", f"{summary.density:,.0f} points per square unit"),
+        ("units (guess)", summary.units),
+        (
+            "up axis (guess)",
+            f"{summary.up_axis}{tilt} (confidence {summary.up_confidence:.2f}): what "
+            "'detect --up auto' uses",
+        ),
+        (
+            "detect's up",
+            "auto (an organized or single-view cloud)"
+            if summary.up_default == "auto"
+            else "z (not a single view; --up auto to estimate it, --up -y... to name it)",
+        ),
+    ]
     for k, v in summary.extra.items():
-        table.add_row(k, str(v))
+        rows.append((k, boxes_line(v) if k == "boxes" else str(v)))
     if summary.sensor is not None:
-        table.add_row(
-            "single view",
-            f"sensor at {fmt3(summary.sensor)}: detection smooths its "
-            "depth steps and knows what objects hide from it",
+        rows.append(
+            (
+                "single view",
+                f"sensor at {fmt3(summary.sensor)}: detection smooths its "
+                "depth steps and knows what objects hide from it",
+            )
         )
-    console.print(table)
+    _print_rows(str(path), rows)
+
+
+def _print_rows(title: str, rows: list[tuple[str, str]]) -> None:
+    """A table in a terminal; plain ``key  value`` lines in a pipe or a file, where a
+    table would pad every row with blanks to its widest value."""
+    if console.is_terminal:
+        table = Table(title=title, show_header=False, box=None, pad_edge=False)
+        table.add_column(style="bold")
+        table.add_column()
+        for key, value in rows:
+            table.add_row(key, value)
+        console.print(table)
+        return
+    width = max(len(key) for key, _ in rows)
+    console.print(title, soft_wrap=True)
+    for key, value in rows:
+        console.print(f"{key:<{width}}  {value}", soft_wrap=True)

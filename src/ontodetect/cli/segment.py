@@ -84,8 +84,11 @@ def segment(
     seed: int = typer.Option(0, "--seed", help="Seed of every random step."),
 ) -> None:
     """Prepare and cluster a scan; write segments.ply and planes.json and print a summary."""
+    from ..config import UP_CHOICES, OneOf, check_param  # lazy: CLI start-up
     from ..segment import segment as run_segment  # lazy: CLI start-up
 
+    if up is not None:  # the library checks it too, but knows only the axes' names
+        check_param("--up", OneOf(UP_CHOICES), up)
     cfg = load_config(config, set_)
     check_output_folder(out)  # before any work
     with reporting():

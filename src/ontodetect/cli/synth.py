@@ -12,7 +12,7 @@ from rich.text import Text
 from ..errors import InvalidParameterError
 from ..io._yaml import load_yaml
 from . import app
-from ._console import console, reporting
+from ._console import console, reporting, state
 from ._defaults import SENSORS
 
 _SENSOR_HELP = {
@@ -113,11 +113,11 @@ def synth(
         with reporting():
             result = synthesize(rooms[0], sensor, seed, points=points, clutter=clutter, **options)
             folder = write_synth(result, out, object_meshes=object_meshes)
-        console.print(f"{folder}: {result.summary()}", markup=False, soft_wrap=True)
+        _show_scene(folder, result)
         return
 
     def show(i: int, result: Any, folder: Path) -> None:
-        console.print(f"{folder}: {result.summary()}", markup=False, soft_wrap=True)
+        _show_scene(folder, result)
 
     with reporting():
         synthesize_many(
@@ -169,4 +169,10 @@ def _synth_furnished(
             )
             folder = out if count == 1 else out / f"scene_{i:04d}"
             write_synth(result, folder, object_meshes=object_meshes)
-            console.print(f"{folder}: {result.summary()}", markup=False, soft_wrap=True)
+            _show_scene(folder, result)
+
+
+def _show_scene(folder: Path, result: Any) -> None:
+    """One line per scene written: its folder and what it holds (none with --quiet)."""
+    if not state.quiet:
+        console.print(f"{folder}: {result.summary()}", markup=False, soft_wrap=True)

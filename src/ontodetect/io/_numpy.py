@@ -71,53 +71,66 @@ _NPZ_NORMAL_NAMES = (("nx", "ny", "nz"),)
 # ---------------------------------------------------------------------------------
 # .npy parsing with bounds checks
 # ---------------------------------------------------------------------------------
-def _npy_header(path: Path, fh: IO[bytes], what: str) -> tuple[np.dtype, tuple[int, ...], bool]:
-    """Read and validate an .npy header; returns (dtype, shape, fortran_order)."""
+def _about(what: str | None, problem: str) -> str:
+    """``"array 'xyz': problem"`` for a member of an archive; the problem alone for the
+    file itself, whose path the error already names."""
+    return problem if what is None else f"{what}: {problem}"
+
+
+def _npy_header(
+    path: Path, fh: IO[bytes], what: str | None
+) -> tuple[np.dtype, tuple[int, ...], bool]:
+    """Read and validate an .npy header; returns (dtype, shape, fortran_order).
+
+    ``what`` names the array in its errors (a member of an .npz archive); None for the
+    file itself."""
+    subject = what or "the file"
     magic = fh.read(8)
     if len(magic) < 8 or not magic.startswith(_MAGIC):
-        raise CorruptFileError(path, f"{what} is not a NumPy .npy array (bad magic bytes)")
+        raise CorruptFileError(path, f"{subject} is not a NumPy .npy array (bad magic bytes)")
     major = magic[6]
     if major == 1:
         length_bytes, size = 2, "<H"
     elif major in (2, 3):
         length_bytes, size = 4, "<I"
     else:
-        raise CorruptFileError(path, f"{what} has unknown .npy format version {major}")
+        raise CorruptFileError(path, f"{subject} has unknown .npy format version {major}")
     raw = fh.read(length_bytes)
     if len(raw) < length_bytes:
-        raise CorruptFileError(path, f"{what}: truncated .npy header")
+        raise CorruptFileError(path, _about(what, "truncated .npy header"))
     length = int(np.frombuffer(raw, size)[0])
     if length > NPY_HEADER_MAX_BYTES:
-        raise CorruptFileError(path, f"{what}: .npy header of {length} bytes is too long")
+        raise CorruptFileError(path, _about(what, f".npy header of {length} bytes is too long"))
     text = fh.read(length)
     if len(text) < length:
-        raise CorruptFileError(path, f"{what}: truncated .npy header")
+        raise CorruptFileError(path, _about(what, "truncated .npy header"))
     try:
         header = ast.literal_eval(text.decode("utf-8" if major == 3 else "latin-1"))
         descr, fortran, shape = header["descr"], header["fortran_order"], header["shape"]
         dtype = np.lib.format.descr_to_dtype(descr)
     except Exception as exc:  # literal_eval and descr_to_dtype raise many types on garbage
         raise CorruptFileError(
-            path, f"{what}: unreadable .npy header ({type(exc).__name__})"
+            path, _about(what, f"unreadable .npy header ({type(exc).__name__})")
         ) from exc
     if not (
         isinstance(shape, tuple)
         and all(isinstance(d, int) and d >= 0 for d in shape)
         and isinstance(fortran, bool)
     ):
-        raise CorruptFileError(path, f"{what}: invalid .npy header (shape {shape!r})")
+        raise CorruptFileError(path, _about(what, f"invalid .npy header (shape {shape!r})"))
     if dtype.hasobject:
-        raise ReadError(path, f"{what} holds Python objects, which are not loaded for safety")
+        raise ReadError(path, f"{subject} holds Python objects, which are not loaded for safety")
     if dtype.itemsize == 0 or dtype.subdtype is not None:
-        raise ReadError(path, f"{what} has type {dtype}, which holds no point data")
+        raise ReadError(path, f"{subject} has type {dtype}, which holds no point data")
     return dtype, shape, fortran
 
 
 def _npy_array(
-    path: Path, fh: IO[bytes], available: int, what: str, spent: int = 0
+    path: Path, fh: IO[bytes], available: int, what: str | None, spent: int = 0
 ) -> NDArray[Any]:
     """Load one .npy array from ``fh`` after checking its size against ``available`` bytes
-    and, with ``spent`` bytes already taken by earlier arrays, against the memory budget."""
+    and, with ``spent`` bytes already taken by earlier arrays, against the memory budget.
+    ``what`` names the array in errors (None: the file itself)."""
     start = fh.tell()
     dtype, shape, fortran = _npy_header(path, fh, what)
     count = math.prod(shape)
@@ -126,21 +139,25 @@ def _npy_array(
     if need > left:
         raise CorruptFileError(
             path,
-            f"{what}: truncated, shape {shape} of {dtype} needs {need} bytes, "
-            f"{max(left, 0)} present",
+            _about(
+                what,
+                f"truncated, shape {shape} of {dtype} needs {need} bytes, {max(left, 0)} present",
+            ),
         )
     if shape:
-        check_points(path, shape[0], what)
-    check_bytes(path, spent + need, what)
+        check_points(path, shape[0], what or "the file")
+    check_bytes(path, spent + need, what or "the file")
     data = fh.read(need)
     if len(data) < need:
-        raise CorruptFileError(path, f"{what}: truncated, {need} bytes needed, {len(data)} read")
+        raise CorruptFileError(
+            path, _about(what, f"truncated, {need} bytes needed, {len(data)} read")
+        )
     try:
         arr = np.frombuffer(data, dtype=dtype, count=count)
         return arr.reshape(shape, order="F" if fortran else "C")
     except ValueError as exc:
         raise CorruptFileError(
-            path, f"{what}: cannot be read as shape {shape} of {dtype} ({exc})"
+            path, _about(what, f"cannot be read as shape {shape} of {dtype} ({exc})")
         ) from exc
 
 
@@ -216,7 +233,7 @@ def read_npy(path: Path, *, on_nonfinite: str = "warn") -> PointCloud:
         with open(path, "rb") as fh:
             size = fh.seek(0, io.SEEK_END)
             fh.seek(0)
-            arr = _npy_array(path, fh, size, "the file")
+            arr = _npy_array(path, fh, size, None)
     except OSError as exc:
         raise ReadError(path, f"cannot read ({exc.strerror or exc})") from exc
     meta: dict[str, Any] = {}

@@ -208,11 +208,15 @@ def assemble_cloud(
         raise CorruptFileError(path, "contains no points")
     if all_finite is None:
         all_finite = bool(np.isfinite(xyz).all())
-    if not all_finite and on_nonfinite == "raise":
+    if not all_finite:
         bad = int(n - np.isfinite(xyz).all(axis=1).sum())
-        raise CorruptFileError(
-            path, f"{bad} of {n} points have NaN or infinite coordinates (on_nonfinite='raise')"
-        )
+        if on_nonfinite == "raise":
+            raise CorruptFileError(
+                path,
+                f"{bad} of {n} points have NaN or infinite coordinates (on_nonfinite='raise')",
+            )
+        if bad == n:  # refused here, before point_cloud warns that it dropped every point
+            raise CorruptFileError(path, f"contains no points with finite coordinates (of {n})")
     fast = (
         all_finite
         and index is None
@@ -689,6 +693,16 @@ def _plan_for(path: Path, vertex: _Element) -> ColumnPlan:
     plan = plan_columns(scalars)
     if plan.xyz is None:
         missing = [c for c in "xyz" if c not in {n.lower() for n in scalars}]
+        lists = [p.name for p in vertex.properties if p.count_code is not None]
+        listed = [name for name in lists if name.lower() in missing]
+        if listed:
+            what = "properties" if len(listed) > 1 else "property"
+            raise CorruptFileError(
+                path,
+                f"element 'vertex': {what} {', '.join(map(repr, listed))} "
+                f"{'are lists' if len(listed) > 1 else 'is a list'}, which is not supported "
+                "for coordinates (x, y and z must be scalar properties)",
+            )
         raise CorruptFileError(
             path,
             f"element 'vertex' has no {'/'.join(missing)} property (properties: "
