@@ -324,7 +324,8 @@ def point_cloud(
         Free-form description of the source.
     on_nonfinite : {"warn", "drop", "raise"}
         What to do with points whose coordinates are NaN or infinite: drop them
-        with a :class:`DataWarning` that counts them ("warn"), drop them
+        with a :class:`DataWarning` that counts them ("warn"; no warning when none
+        is left: the empty cloud says it), drop them
         silently ("drop", for formats where missing points are normal), or
         raise :class:`~ontodetect.errors.InvalidParameterError` ("raise").
         Dropped points keep their place in :attr:`PointCloud.index`.
@@ -377,7 +378,7 @@ def point_cloud(
         bad = int(n - finite.sum())
         if on_nonfinite == "raise":
             raise InvalidParameterError("xyz", "finite coordinates", f"{bad} NaN/Inf points")
-        if on_nonfinite == "warn":
+        if on_nonfinite == "warn" and bad < n:  # none left: whoever needs points says so
             src = (meta or {}).get("source", "input")
             warnings.warn(
                 f"{src}: dropped {bad} of {n} points with NaN or infinite coordinates",

@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from ..cloud import PointCloud
-from ..errors import ReadError, UnsupportedFormatError, WriteError
+from ..errors import CorruptFileError, ReadError, UnsupportedFormatError, WriteError
 from ._arrays import read_array_archive, write_array_archive
 from ._atomic import (
     RUN_MARKER,
@@ -340,6 +340,8 @@ def read_cloud(
         cloud = READERS[fmt](p, **options)
     except PermissionError as exc:
         raise ReadError(exc.filename or p, "permission denied") from None
+    if len(cloud) == 0:  # every point had NaN or infinite coordinates
+        raise CorruptFileError(p, "contains no points with finite coordinates")
     meta = {"source": str(p), "format": fmt}
     meta.update({k: v for k, v in cloud.meta.items() if k not in meta})
     return cloud.with_meta(**meta)
