@@ -90,3 +90,15 @@ def test_a_bare_frame_in_a_cameras_own_axes_finds_its_floor():
     assert not any("no floor found" in str(w.message) for w in caught)
     up = np.asarray(result.frame["up"], dtype=float)
     assert up @ [0.0, -1.0, 0.0] > 0.99
+
+
+def test_info_says_what_detect_does_with_a_bare_frame():
+    """``info`` guesses up as ``detect`` will: on the view taken as a frame."""
+    from ontodetect.summary import describe_cloud
+
+    view, _ = _ray_cast()
+    camera = np.c_[view[:, 0], -view[:, 2], view[:, 1]]
+    summary = describe_cloud(point_cloud(camera))
+    assert summary.up_default == "auto" and summary.up_axis == "-y"
+    fused = describe_cloud(synthesize("tiny", seed=1).cloud)
+    assert fused.up_default == "z"

@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._units import estimate_spacing, guess_units
-from .cloud import PointCloud, point_cloud, sensor_position
+from .cloud import PointCloud, pixel_grid, point_cloud, sensor_position
 from .errors import InvalidParameterError
 from .geometry import unit_direction
 
@@ -37,6 +37,7 @@ __all__ = [
     "estimate_up",
     "grouped_covariance",
     "guess_up",
+    "inferred_view",
     "is_single_view",
     "looks_like_one_view",
     "manhattan_axes",
@@ -550,6 +551,32 @@ def looks_like_one_view(xyz: ArrayLike, eye: ArrayLike = (0.0, 0.0, 0.0)) -> boo
     if not multi.any():
         return False
     return float(np.mean((far - near)[multi] <= VIEW_SPREAD * near[multi])) >= VIEW_SHARE
+
+
+def inferred_view(cloud: PointCloud) -> PointCloud | None:
+    """``cloud`` taken as a depth frame seen from the origin when it has no sensor position
+    and no pixel grid but looks like one view (:func:`looks_like_one_view`): its points'
+    pixel grid (:func:`view_grid`, field ``pixel``), the sensor at the origin and the
+    view's up axis (:func:`view_up`) in ``meta``; None for any other cloud. What
+    ``detect`` does with such a cloud (``detect.infer_view``), and what ``info`` says of it.
+
+    Examples
+    --------
+    >>> from ontodetect import point_cloud
+    >>> inferred_view(point_cloud([[0.0, 0, 1], [1, 0, 1]])) is None  # too few to tell
+    True
+    """
+    if sensor_position(cloud) is not None or pixel_grid(cloud) is not None:
+        return None
+    if not looks_like_one_view(cloud.xyz):
+        return None
+    pixels, width, height = view_grid(cloud.xyz)
+    return cloud.replace(fields={**cloud.fields, "pixel": pixels}).with_meta(
+        sensor_position=[0.0, 0.0, 0.0],
+        width=width,
+        height=height,
+        view_up=view_up(cloud.xyz[:: max(1, len(cloud) // 100_000)]),
+    )
 
 
 def view_up(xyz: ArrayLike, eye: ArrayLike = (0.0, 0.0, 0.0)) -> str:

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from ._units import estimate_spacing, guess_units
-from ._up import guess_up
+from ._up import guess_up, inferred_view
 from .cloud import PointCloud, pixel_grid, sensor_position
 from .errors import InvalidParameterError
 
@@ -77,7 +77,8 @@ def describe_cloud(cloud: PointCloud, *, seed: int = 0) -> CloudSummary:
     ext = hi - lo
     # Points per square metre of surface: one point per spacing² cell.
     density = 1.0 / spacing**2 if spacing > 0 else 0.0
-    up = guess_up(cloud, "auto")
+    # A bare-point view is taken as a frame by detect (detect.infer_view): say so.
+    up = guess_up(inferred_view(cloud) or cloud, "auto")
     extra = {k: v for k, v in cloud.meta.items() if k not in ("source", "format")}
     return CloudSummary(
         source=cloud.meta.get("source"),

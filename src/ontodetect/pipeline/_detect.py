@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 from .._parallel import cpu_count, fork_context, one_blas_thread
 from .._progress import progress, use_reporter
 from .._rules import SEED
-from .._up import looks_like_one_view, view_grid, view_up
+from .._up import inferred_view
 from ..cloud import DataWarning, PointCloud, as_position, pixel_grid, sensor_position
 from ..config import COUNT, Config, Nullable, check_param
 from ..errors import InvalidParameterError
@@ -149,12 +149,8 @@ def detect(
     if viewpoint is not None:
         cloud = cloud.with_meta(sensor_position=as_position(viewpoint).tolist())
     eye = sensor_position(cloud)
-    if (
-        eye is None
-        and d.infer_view
-        and pixel_grid(cloud) is None
-        and looks_like_one_view(cloud.xyz)
-    ):
+    frame = inferred_view(cloud) if d.infer_view and eye is None else None
+    if frame is not None:
         warnings.warn(
             f"{cloud.meta.get('source') or 'the cloud'}: one view seen from the origin (all of "
             "it in a cone from there, one surface per sight line): taken as a depth frame "
@@ -163,13 +159,7 @@ def detect(
             DataWarning,
             stacklevel=2,
         )
-        pixels, width, height = view_grid(cloud.xyz)
-        cloud = cloud.replace(fields={**cloud.fields, "pixel": pixels}).with_meta(
-            sensor_position=[0.0, 0.0, 0.0],
-            width=width,
-            height=height,
-            view_up=view_up(cloud.xyz[:: max(1, len(cloud) // 100_000)]),
-        )
+        cloud = frame
         eye = sensor_position(cloud)
     elif eye is not None and pixel_grid(cloud) is None:
         warnings.warn(
