@@ -25,6 +25,11 @@ by side, so that the note of a change can give all three:
 A part one of the runs did not measure (``--only``) is left out, and said so. Rows that did
 not change are printed dim; ``--changed`` prints only the rows that did. ``--markdown``
 prints Markdown tables instead, to paste into a note or docs/benchmarks.md.
+
+Either side may be several runs, comma-separated (the same change under detection seeds
+0, 1 and 2: ``--seed``): they are pooled (:func:`pool_runs`), every count summed, so that a
+change is judged over several draws of MSAC's samples rather than one. The objects one by
+one and stability, which belong to one run, are left out of a pooled side.
 """
 
 from __future__ import annotations
@@ -39,7 +44,7 @@ from typing import Any
 from rich.console import Console
 from rich.table import Table
 
-from ._generalization import MISSED_CAUSES, POOLED, pooled_orientations
+from ._generalization import MISSED_CAUSES, POOLED, class_figures, pooled_orientations
 from .bench_generalization import THRESHOLDS
 
 console = Console(highlight=False)
@@ -51,6 +56,14 @@ FORMATS = ("ontodetect.bench.generalization/1",)
 
 class CompareError(Exception):
     """A file that is not a generalization benchmark result: one line for the user."""
+
+
+def load_runs(paths: str) -> dict[str, Any]:
+    """One ``generalization.json``, or several comma-separated ones pooled (:func:`pool_runs`)."""
+    docs = [load_run(Path(p)) for p in paths.split(",") if p.strip()]
+    if not docs:
+        raise CompareError(f"{paths!r}: no generalization.json named")
+    return docs[0] if len(docs) == 1 else pool_runs(docs)
 
 
 def load_run(path: Path) -> dict[str, Any]:
@@ -73,6 +86,45 @@ def load_run(path: Path) -> dict[str, Any]:
     if fmt is not None and fmt not in FORMATS:
         raise CompareError(f"{path}: format {fmt!r}, expected one of {', '.join(FORMATS)}")
     return doc
+
+
+#: Parts and lists that belong to one run: left out of pooled runs.
+PER_RUN = frozenset({"stability", "mistakes"})
+#: Subtrees whose numbers are counts of objects: summed when runs are pooled.
+COUNTS = frozenset({"missed", "false_detections"})
+
+
+def pool_runs(docs: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
+    """Several runs of the benchmark as one: every class's TP, detections and ground truth
+    summed (precision and recall from the sums), and the counts of the missed objects and
+    false detections, in every part all the runs measured; the rest as the first run has
+    it, but for :data:`PER_RUN`.
+
+    >>> one = {"real": {"per_class": {"iou@0.25": {"chair": {"tp": 2, "det": 3, "gt": 4}}}}}
+    >>> pool_runs([one, one])["real"]["per_class"]["iou@0.25"]["chair"]
+    {'tp': 4, 'det': 6, 'gt': 8, 'precision': 0.6667, 'recall': 0.5}
+    """
+    return _pooled(list(docs), counts=False, top=True)
+
+
+def _pooled(objs: list[Any], *, counts: bool, top: bool = False) -> Any:
+    first = objs[0]
+    if isinstance(first, Mapping):
+        if {"tp", "det", "gt"} <= set(first) and all(isinstance(o, Mapping) for o in objs):
+            tp, det, gt = (sum(int(o.get(k, 0)) for o in objs) for k in ("tp", "det", "gt"))
+            return class_figures(tp, det, gt)
+        maps = [o for o in objs if isinstance(o, Mapping)]
+        # Counts: a kind one run never met counts 0 there. Anything else: what every run has.
+        keys = dict.fromkeys(k for o in maps for k in o) if counts else first
+        return {
+            k: _pooled([o[k] for o in maps if k in o], counts=counts or k in COUNTS)
+            for k in keys
+            if not (k in PER_RUN or (top and k == "pooled_runs"))
+            and (counts or all(isinstance(o, Mapping) and k in o for o in objs))
+        } | ({"pooled_runs": len(objs)} if top else {})
+    if counts and all(isinstance(o, int) and not isinstance(o, bool) for o in objs):
+        return sum(objs)
+    return first
 
 
 def _key(iou: float) -> str:
@@ -521,6 +573,8 @@ def _settings(doc: Mapping[str, Any]) -> str:
         bits.append(f"--ontology {o.get('path')} (sha256 {str(o.get('sha256'))[:12]})")
     if doc.get("quick"):
         bits.append("quick")
+    if doc.get("pooled_runs"):
+        bits.append(f"{doc['pooled_runs']} runs pooled")
     return ", ".join(bits)
 
 
@@ -529,8 +583,11 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(
         prog="python -m benchmarks compare", description=__doc__.splitlines()[0]
     )
-    ap.add_argument("before", type=Path, help="generalization.json of the run before the change")
-    ap.add_argument("after", type=Path, help="generalization.json of the run after it")
+    ap.add_argument(
+        "before",
+        help="generalization.json of the run before the change (several, comma-separated: pooled)",
+    )
+    ap.add_argument("after", help="generalization.json of the run after it (the same)")
     ious = " or ".join(f"{t:g}" for t in THRESHOLDS.values())
     ap.add_argument("--iou", type=float, default=0.25, help=f"point IoU of the figures: {ious}")
     ap.add_argument("--changed", action="store_true", help="print only the rows that changed")
@@ -542,7 +599,7 @@ def main(argv: list[str] | None = None) -> int:
         err.print(f"--iou must be {ious}, got {args.iou:g}", soft_wrap=True)
         return 2
     try:
-        before, after = load_run(args.before), load_run(args.after)
+        before, after = load_runs(args.before), load_runs(args.after)
     except CompareError as exc:
         err.print(str(exc), soft_wrap=True)
         return 2

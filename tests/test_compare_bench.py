@@ -292,6 +292,35 @@ def test_main_prints_both_runs_settings_and_the_tables(tmp_path, capsys, monkeyp
     assert "Real scans, TP/det/GT at point IoU 0.25: no change" in out
 
 
+def test_runs_under_other_seeds_are_pooled_count_by_count():
+    one = run_doc(chairs=(8, 10, 12), wc_as_chair=2, merged=2)
+    two = run_doc(chairs=(9, 11, 12), wc_as_chair=0, merged=1)
+    two["simulated"]["false_detections"]["iou@0.25"]["sink"] = {"total": 1, "as": {"table": 1}}
+    pooled = C.pool_runs([one, two])
+    sim = pooled["simulated"]
+    assert sim["per_class"]["iou@0.25"]["chair"] == {
+        "tp": 17, "det": 21, "gt": 24, "precision": 0.8095, "recall": 0.7083
+    }  # fmt: skip
+    assert sim["by_room_type"]["office"]["iou@0.25"]["overall"]["tp"] == 18
+    false = sim["false_detections"]["iou@0.25"]
+    assert false["toilet"]["total"] == 2 and false["sink"] == {"total": 1, "as": {"table": 1}}
+    assert sim["missed"]["iou@0.25"]["chair"]["causes"] == {"merged": 3, "scored": 4}
+    assert pooled["sparse"]["changes"]["a quarter of the points"]["per_class"]["chair"]["gt"] == 60
+    assert "stability" not in pooled and pooled["pooled_runs"] == 2
+    assert pooled["room"] == "auto"  # what is not a count: the first run's
+
+
+def test_main_pools_comma_separated_runs(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(C, "console", Console(width=200, highlight=False))
+    a = write(tmp_path, "a.json", run_doc(chairs=(8, 10, 12)))
+    b = write(tmp_path, "b.json", run_doc(chairs=(9, 10, 12)))
+    c = write(tmp_path, "c.json", run_doc(chairs=(10, 10, 12)))
+    assert C.main([f"{a},{b}", str(c), "--changed"]) == 0
+    out = capsys.readouterr().out
+    assert "2 runs pooled" in out and "17/20/24" in out and "10/10/12" in out
+    assert "Stability: not in the first run" in out
+
+
 @pytest.mark.parametrize(
     ("content", "says"),
     [
