@@ -122,3 +122,38 @@ def test_a_terminal_gets_the_table(votenet_scan, monkeypatch):
     row = next(line for line in lines if "boxes" in line)
     assert "30 (12 cabinet [3], 10 chair [5], 8 table [7]" in row
     assert len(lines) < 25
+
+
+def test_a_list_field_is_printed_as_comma_separated_values(tmp_path, capsys):
+    f = tmp_path / "p.txt"
+    f.write_text("x y z intensity\n0 0 0 1\n1 0 0 2\n0 1 0 3\n0 0 1 4\n")
+    assert main(["info", str(f)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert "columns          x, y, z, intensity" in lines
+    assert "delimiter        whitespace" in lines
+    # --json keeps the list.
+    assert main(["info", str(f), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["extra"]["columns"] == ["x", "y", "z", "intensity"]
+
+
+@pytest.mark.parametrize(
+    ("value", "line"),
+    [
+        (["x", "y", "z"], "x, y, z"),
+        ([0.1, 2.0, 1e-7], "0.1, 2, 1e-07"),
+        ([[1.0, 0.0, 0.0], [0.0, 1.0, 0.5]], "[1, 0, 0], [0, 1, 0.5]"),
+        ({"width": 640, "height": 480}, "width: 640, height: 480"),
+        ([{"class_id": 3, "box": {"size": [1.0, 2.0]}}], "{class_id: 3, box: {size: [1, 2]}}"),
+        ("whitespace", "whitespace"),
+        (True, "True"),
+        ([], ""),
+        (
+            [f"s{k}" for k in range(14)],
+            "s0, s1, s2, s3, s4, s5, s6, s7, s8, s9, s10, s11, ... (14 in all; --json lists them)",
+        ),
+    ],
+)
+def test_value_line_prints_lists_and_mappings_plainly(value, line):
+    from ontodetect.cli.info import value_line
+
+    assert value_line(value) == line

@@ -1,5 +1,6 @@
 """``-q``: no progress, tables or summaries from any command; errors, warnings and what
-``info``, ``--json`` and ``--explain`` print still appear (what its help says)."""
+``info``, ``cad models``, ``--json`` and ``--explain`` print still appear (what its help
+says)."""
 
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ def test_the_help_says_what_quiet_leaves_out_and_keeps():
     quiet = next(p for p in typer.main.get_command(app).params if p.name == "quiet")
     assert quiet.help == (
         "No progress bars, tables or summaries (the files are written all the same); "
-        "errors, warnings and what info, --json and --explain print still appear."
+        "errors, warnings and what info, cad models, --json and --explain print still appear."
     )
 
 
@@ -46,3 +47,18 @@ def test_info_still_prints_its_description_with_quiet(tmp_path, capsys):
     assert main(["-q", "info", str(f)]) == 0
     lines = capsys.readouterr().out.splitlines()
     assert lines[:3] == [str(f), "format           npy", "points           4"]
+
+
+def test_cad_models_still_prints_its_list_with_quiet(tmp_path, capsys):
+    from ontodetect.cad import builtin_library
+
+    png = tmp_path / "models.png"
+    assert main(["-q", "cad", "models", "--picture", str(png)]) == 0
+    captured = capsys.readouterr()
+    lib = builtin_library()
+    assert captured.out.lstrip().startswith(f"{len(lib)} models")
+    for name in lib:
+        assert name in captured.out
+    assert "wrote" not in captured.out  # the summary line is left out
+    assert captured.err == ""
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -11,7 +11,7 @@ import pytest
 from ontodetect import CorruptFileError, ReadError, read_cloud
 from ontodetect.io import detect_format
 from ontodetect.io._labels import read_scannet_label_map
-from ontodetect.io._scannet import read_scannet, read_scannet_votenet
+from ontodetect.io._scannet import read_scannet, read_scannet_votenet, votenet_label_files
 
 SCENE = "scene0042_00"
 # Vertex -> segment, and the objects of the aggregation (objectId, label, segments).
@@ -237,9 +237,19 @@ def test_votenet_from_a_label_file_and_the_registry(tmp_path):
 def test_votenet_points_only(tmp_path):
     f = make_votenet_scan(tmp_path)
     (tmp_path / f"{SCENE}_ins_label.npy").unlink()
-    with pytest.raises(ReadError, match=r"_ins_label\.npy: missing: pass labels=False"):
+    with pytest.raises(ReadError, match=r"_ins_label\.npy: missing: it holds the scan's labels"):
         read_scannet_votenet(f)
     assert dict(read_scannet_votenet(f, labels=False).fields) == {}
+
+
+@pytest.mark.parametrize("suffix", ["_vert.npy", "_sem_label.npy", "_ins_label.npy", "_bbox.npy"])
+def test_votenet_label_files_of_every_file_of_a_scan(tmp_path, suffix):
+    f = tmp_path / f"{SCENE}{suffix}"
+    assert votenet_label_files(f) == [
+        tmp_path / f"{SCENE}_sem_label.npy",
+        tmp_path / f"{SCENE}_ins_label.npy",
+    ]
+    assert votenet_label_files(tmp_path / f"{SCENE}.ply") == []
 
 
 def test_votenet_lengths_disagree(tmp_path):

@@ -203,12 +203,23 @@ def test_an_npy_with_a_damaged_header_is_one_plain_line(tmp_path, capsys):
     assert line == f"error: {f}: unreadable .npy header (SyntaxError)"
 
 
-@pytest.mark.parametrize("command", ["detect", "segment"])
-def test_a_bad_up_axis_lists_every_value_up_takes(tmp_path, capsys, command):
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["detect", "{scan}", "-o", "{out}"],
+        ["segment", "{scan}", "-o", "{out}"],
+        ["eval", "{folder}", "-o", "{out}"],
+        ["calibrate", "{folder}", "-o", "{out}"],
+    ],
+    ids=["detect", "segment", "eval", "calibrate"],
+)
+def test_a_bad_up_axis_lists_every_value_up_takes(tmp_path, capsys, args):
     f = tmp_path / "scan.npy"
     np.save(f, np.zeros((10, 3)))
     out = tmp_path / "o"
-    line = one_line(capsys, main([command, str(f), "-o", str(out), "--up", "q"]))
+    argv = [a.format(scan=f, folder=tmp_path, out=out) for a in args]
+    # Named as the option, not as the configuration key it sets (prepare.up).
+    line = one_line(capsys, main([*argv, "--up", "q"]))
     assert line == (
         "error: The '--up' parameter must be one of 'z', '-z', 'y', '-y', 'x', '-x', "
         "'auto', 'auto-frame'. Got 'q' instead."
@@ -232,7 +243,7 @@ def test_an_output_folder_that_is_a_file_is_refused_before_any_work(
         raise AssertionError("the scan was read before the output folder was checked")
 
     monkeypatch.setattr(io, "read_cloud", no_reading)
-    monkeypatch.setattr(f"ontodetect.cli.{command}.read_cloud", no_reading)
+    monkeypatch.setattr("ontodetect.cli._clouds.read_cloud", no_reading)  # the commands' reader
     (tmp_path / "afile").write_text("")
     status = main([command, str(room[0]), "-o", str(tmp_path / "afile")])
     one_line(capsys, status, "afile", "is a file, not a folder")

@@ -18,7 +18,7 @@ from ontodetect.errors import CorruptFileError, ReadError
 from ontodetect.evaluation import discover_scenes, evaluate_dataset, load_scene
 from ontodetect.geometry import box_corners
 from ontodetect.io import detect_format, expand_inputs, read_cloud
-from ontodetect.io._sunrgbd import SUNRGBD_CLASSES, boxes_to_labels
+from ontodetect.io._sunrgbd import SUNRGBD_CLASSES, boxes_to_labels, sunrgbd_label_files
 
 CHAIR, TABLE = 3, 1  # VoteNet's class indices
 
@@ -120,8 +120,10 @@ def test_a_damaged_box_file_is_refused_naming_it(tmp_path, boxes, message):
 
 def test_a_frame_without_boxes_reads_as_points_but_is_no_labelled_scene(tmp_path):
     np.savez_compressed(tmp_path / "000003_pc.npz", pc=np.zeros((3, 6), np.float32))
-    with pytest.raises(ReadError, match=r"000003_bbox\.npy.*missing"):
+    with pytest.raises(ReadError, match=r"000003_bbox\.npy: missing: its boxes label"):
         read_cloud(tmp_path / "000003_pc.npz", format="sunrgbd-votenet")
+    assert sunrgbd_label_files(tmp_path / "000003_pc.npz") == [tmp_path / "000003_bbox.npy"]
+    assert sunrgbd_label_files(tmp_path / "000003.npz") == []
     assert len(read_cloud(tmp_path / "000003_pc.npz")) == 3
     with pytest.raises(ReadError, match="holds no scene"):
         discover_scenes(tmp_path)

@@ -46,7 +46,7 @@ def _global_options(
         "--quiet",
         "-q",
         help="No progress bars, tables or summaries (the files are written all the same); "
-        "errors, warnings and what info, --json and --explain print still appear.",
+        "errors, warnings and what info, cad models, --json and --explain print still appear.",
     ),
     verbose: bool = typer.Option(False, "--verbose", "-v", help="Print more detail."),
     version: bool = typer.Option(

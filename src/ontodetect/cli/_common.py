@@ -47,6 +47,16 @@ def load_config(config: Path | None, overrides: list[str], **options: Any) -> Co
     return cfg.replace(**changes) if changes else cfg
 
 
+def check_up_option(up: str | None) -> None:
+    """``--up`` is one of :data:`~ontodetect.config.UP_CHOICES` (None: not given); checked
+    before the configuration is loaded, so that the error names the option, not the key it
+    sets (``prepare.up``)."""
+    from ..config import UP_CHOICES, OneOf, check_param  # lazy: CLI start-up
+
+    if up is not None:
+        check_param("--up", OneOf(UP_CHOICES), up)
+
+
 def load_ontology_option(files: list[Path], only: bool) -> Ontology:
     """The built-in ontology with ``--ontology`` files merged in (or only them)."""
     from ..ontology import load_ontology  # lazy: CLI start-up

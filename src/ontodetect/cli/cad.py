@@ -10,9 +10,10 @@ import typer
 from rich.table import Table
 
 from ..errors import InvalidParameterError
-from ..io import atomic_write, check_output_folder, read_cloud, staged_folder
+from ..io import atomic_write, check_output_folder, staged_folder
 from ..io._detections import read_detections, write_detections
 from . import app
+from ._clouds import FORMAT_HELP, cloud_format, read_scan
 from ._console import console, reporting, state
 from ._defaults import KERNELS, MIN_SCORE
 
@@ -51,7 +52,7 @@ def fit(
         ..., metavar="INPUT", help="The point cloud the detections were made on."
     ),
     out: Path = typer.Option(..., "--out", "-o", help="Output folder."),
-    format: str | None = typer.Option(None, "--format", "-f", help="Force the input format."),
+    format: str | None = typer.Option(None, "--format", "-f", help=FORMAT_HELP),
     models: list[Path] = typer.Option([], "--models", help="Model manifest YAML (repeatable)."),
     models_only: bool = typer.Option(
         False, "--models-only", help="Use only the --models manifests, not the built-ins."
@@ -73,10 +74,11 @@ def fit(
     from ..cad import cad_dict, fit_document, write_object_map  # lazy: CLI start-up
 
     check_output_folder(out)  # before any work
+    fmt = cloud_format(format, "cad fit")
     lib = load_library(models, models_only)
     doc = read_detections(detections)
     with reporting():
-        cloud = read_cloud(path, format=format)
+        cloud = read_scan(path, fmt)
         fits = fit_document(
             doc, cloud, lib, min_score=min_score, seed=seed, scale_to_object=scale, kernel=kernel
         )
@@ -128,8 +130,7 @@ def models_command(
         fig = library_figure(lib)
         with atomic_write(picture, "wb") as fh:
             fig.savefig(fh, format="png", dpi=90)
-    if state.quiet:
-        return
+    # The list is the command's result: printed under -q too, like info's description.
     table = Table(title=f"{len(lib)} models")
     for col in ("name", "label", "w × d × h (m)", "seat/top", "turns", "source"):
         table.add_column(col, no_wrap=col != "source")
@@ -145,5 +146,5 @@ def models_command(
             m.source,
         )
     console.print(table)
-    if picture is not None:
+    if picture is not None and not state.quiet:
         console.print(f"wrote {picture}")

@@ -12,7 +12,13 @@ from rich.text import Text
 from ..io import atomic_write_text
 from ..io._layouts import DATASET_FORMATS
 from . import app
-from ._common import SCHEDULER_HELP, WORKERS_HELP, executor_option, load_config
+from ._common import (
+    SCHEDULER_HELP,
+    WORKERS_HELP,
+    check_up_option,
+    executor_option,
+    load_config,
+)
 from ._console import console, err_console, reporting, state
 from ._defaults import (
     MIN_GAIN_ROOMS,
@@ -116,6 +122,7 @@ def calibrate(
     """Estimate each constraint's mean and sigma from labelled objects; check on held-out rooms."""
     from ..calibrate import FitSettings, calibrate_dataset  # lazy: CLI start-up
 
+    check_up_option(up)
     opts: dict = {
         "config": load_config(config, set_, up=up, scale=scale, threshold=threshold),
         "seed": 0,

@@ -13,12 +13,14 @@ from rich.text import Text
 from ..cloud import as_position
 from ..errors import OntoDetectError
 from ..geometry import jsonable
-from ..io import check_output_folder, expand_inputs, read_cloud
+from ..io import check_output_folder, expand_inputs
 from . import app
+from ._clouds import FORMAT_HELP, cloud_format, read_scan
 from ._common import (
     SCHEDULER_HELP,
     WORKERS_HELP,
     check_executor_options,
+    check_up_option,
     executor_option,
     load_config,
     load_ontology_option,
@@ -60,7 +62,7 @@ def detect(
     scheduler: str | None = typer.Option(
         None, "--scheduler", metavar="tcp://HOST:PORT", help=SCHEDULER_HELP
     ),
-    format: str | None = typer.Option(None, "--format", "-f", help="Force the input format."),
+    format: str | None = typer.Option(None, "--format", "-f", help=FORMAT_HELP),
     config: Path | None = typer.Option(None, "--config", "-c", help="Configuration YAML."),
     set_: list[str] = typer.Option(
         [],
@@ -186,7 +188,6 @@ def detect(
 ) -> None:
     """Detect objects; write detections.json, labelled.ply, boxes.txt and detections.png
     (and mesh.ply with --mesh)."""
-    from ..config import UP_CHOICES, OneOf, check_param  # lazy: CLI start-up
     from ..outputs import (  # lazy: CLI start-up
         check_explain_options,
         check_output_options,
@@ -202,8 +203,8 @@ def detect(
     check_output_options(labelled_format.lower(), exports)
     check_output_folder(out)  # before any work, not after the detection
     check_executor_options(scheduler, workers, jobs)
-    if up is not None:  # named as the option, not as the key it sets (prepare.up)
-        check_param("--up", OneOf(UP_CHOICES), up)
+    check_up_option(up)
+    fmt = cloud_format(format, "detect")
     cfg = load_config(
         config,
         set_,
@@ -238,7 +239,7 @@ def detect(
             overlap=overlap,
             executor=(scheduler, workers, jobs),
             as_json=as_json,
-            format=format,
+            format=fmt,
             exports=exports,
             detect_options=options,
         )
@@ -253,7 +254,7 @@ def detect(
             out,
             executor=(scheduler, workers, jobs),
             as_json=as_json,
-            format=format,
+            format=fmt,
             detect_options={**options, "viewpoint": eye, "scene_rooms": scene_rooms},
             picture=picture,
             labelled_format=labelled_format.lower(),
@@ -263,7 +264,7 @@ def detect(
         return
     path = inputs[0]
     with reporting():
-        cloud = read_cloud(path, format=format)
+        cloud = read_scan(path, fmt)
         result = run_detect(
             cloud,
             config=cfg,

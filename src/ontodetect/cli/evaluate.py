@@ -14,6 +14,7 @@ from . import app
 from ._common import (
     SCHEDULER_HELP,
     WORKERS_HELP,
+    check_up_option,
     executor_option,
     load_config,
     load_ontology_option,
@@ -131,6 +132,7 @@ def eval_(
     from ..evaluation import evaluate_dataset, write_report  # lazy: CLI start-up
     from ..evaluation._report import CRITERION_NAMES, report_document  # lazy: CLI start-up
 
+    check_up_option(up)
     cfg = load_config(
         config,
         set_,

@@ -10,38 +10,15 @@ from typing import Any
 import typer
 from rich.table import Table
 
-from ..errors import InvalidParameterError, ReadError
-from ..io import read_cloud, supported_formats
+from ..errors import ReadError
 from ..io._labels import nyu40_name
-from ..io._layouts import DATASET_FORMATS, FORMAT_ALIASES
 from . import app
+from ._clouds import FORMAT_HELP, cloud_format, read_scan
 from ._console import console, reporting
 
 #: Layouts of one scan per file, as named in ``--format`` (VoteNet's): a folder of them is a
 #: dataset, which ``ontodetect eval`` reads.
 SCAN_FILES = {"scannet-votenet": "*_vert.npy", "sunrgbd-votenet": "*_pc.npz"}
-
-
-def cloud_format(format: str | None) -> str | None:
-    """The reader ``--format`` names: one of :func:`~ontodetect.io.supported_formats`, or
-    a layout's other name in ``eval -f`` (``sunrgbd``, ``votenet``) when it names one.
-
-    Examples
-    --------
-    >>> cloud_format("sunrgbd"), cloud_format("PLY"), cloud_format(None)
-    ('sunrgbd-votenet', 'ply', None)
-    """
-    if format is None:
-        return None
-    name = format.strip().lower()
-    name = FORMAT_ALIASES.get(name, name)
-    readable = supported_formats()
-    if name in readable:
-        return name
-    rule = "one of " + ", ".join(readable) + " (info reads one cloud or scan)"
-    if name in DATASET_FORMATS:
-        rule += f"; {format!r} is a dataset layout: 'ontodetect eval -f {format}' reads it"
-    raise InvalidParameterError("--format", rule, format)
 
 
 def boxes_line(boxes: list[Any]) -> str:
@@ -60,6 +37,46 @@ def boxes_line(boxes: list[Any]) -> str:
     return f"{len(boxes)} ({per_class}; --json lists them)" if boxes else "0"
 
 
+#: Items of a list ``info`` prints in full; --json lists the rest.
+MAX_ITEMS = 12
+
+
+def value_line(value: Any) -> str:
+    """An extra field of a scan in one line: a list's items comma-separated (the first
+    :data:`MAX_ITEMS`), nested lists in brackets and mappings in braces, numbers short.
+
+    Examples
+    --------
+    >>> value_line(["x", "y", "z"])
+    'x, y, z'
+    >>> value_line([[1.0, 0.0], [0.5, 2.25]])
+    '[1, 0], [0.5, 2.25]'
+    >>> value_line({"width": 640, "size": [0.1, 0.2]})
+    'width: 640, size: [0.1, 0.2]'
+    >>> value_line(list(range(20)))
+    '0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, ... (20 in all; --json lists them)'
+    """
+    if isinstance(value, dict):
+        return ", ".join(f"{k}: {_item(v)}" for k, v in value.items())
+    if isinstance(value, (list, tuple)):
+        line = ", ".join(_item(v) for v in value[:MAX_ITEMS])
+        if len(value) > MAX_ITEMS:
+            line += f", ... ({len(value)} in all; --json lists them)"
+        return line
+    return _item(value)
+
+
+def _item(value: Any) -> str:
+    """One value inside a list or mapping: nested ones bracketed, floats in ``g`` form."""
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{k}: {_item(v)}" for k, v in value.items()) + "}"
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_item(v) for v in value) + "]"
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    return str(value)
+
+
 @app.command()
 def info(
     path: Path = typer.Argument(..., help="Point cloud file or scan folder."),
@@ -67,15 +84,14 @@ def info(
         None,
         "--format",
         "-f",
-        help=f"Force a format: {', '.join(supported_formats())} (sunrgbd and votenet name "
-        "the VoteNet layouts; 'ontodetect eval' reads a dataset folder).",
+        help=f"{FORMAT_HELP} 'ontodetect eval' reads a dataset folder.",
     ),
     as_json: bool = typer.Option(False, "--json", help="Print machine-readable JSON."),
 ) -> None:
     """Print number of points, fields, bounds, spacing, and guesses of units and up axis."""
     from ..summary import describe_cloud  # lazy: CLI start-up
 
-    fmt = cloud_format(format)
+    fmt = cloud_format(format, "info")
     if fmt in SCAN_FILES and path.is_dir():
         raise ReadError(
             path,
@@ -83,7 +99,7 @@ def info(
             f"{SCAN_FILES[fmt]} file); 'ontodetect eval -f {format}' reads a dataset folder",
         )
     with reporting():
-        cloud = read_cloud(path, format=fmt)
+        cloud = read_scan(path, fmt)
     summary = describe_cloud(cloud)
     if as_json:
         typer.echo(json.dumps(summary.to_dict(), indent=2))
@@ -119,7 +135,7 @@ def info(
         ),
     ]
     for k, v in summary.extra.items():
-        rows.append((k, boxes_line(v) if k == "boxes" else str(v)))
+        rows.append((k, boxes_line(v) if k == "boxes" else value_line(v)))
     if summary.sensor is not None:
         rows.append(
             (

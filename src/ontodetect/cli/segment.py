@@ -10,9 +10,10 @@ import numpy as np
 import typer
 from rich.table import Table
 
-from ..io import atomic_write_text, check_output_folder, read_cloud, staged_folder, write_cloud
+from ..io import atomic_write_text, check_output_folder, staged_folder, write_cloud
 from . import app
-from ._common import load_config
+from ._clouds import FORMAT_HELP, cloud_format, read_scan
+from ._common import check_up_option, load_config
 from ._console import console, reporting, state
 
 #: Colour of points in no cluster.
@@ -66,7 +67,7 @@ def write_segmentation(seg: Segmentation, out: Path) -> tuple[Path, Path]:
 def segment(
     path: Path = typer.Argument(..., help="Point cloud file or scan folder."),
     out: Path = typer.Option(..., "--out", "-o", help="Output folder."),
-    format: str | None = typer.Option(None, "--format", "-f", help="Force the input format."),
+    format: str | None = typer.Option(None, "--format", "-f", help=FORMAT_HELP),
     config: Path | None = typer.Option(None, "--config", "-c", help="Configuration YAML."),
     set_: list[str] = typer.Option(
         [],
@@ -84,15 +85,14 @@ def segment(
     seed: int = typer.Option(0, "--seed", help="Seed of every random step."),
 ) -> None:
     """Prepare and cluster a scan; write segments.ply and planes.json and print a summary."""
-    from ..config import UP_CHOICES, OneOf, check_param  # lazy: CLI start-up
     from ..segment import segment as run_segment  # lazy: CLI start-up
 
-    if up is not None:  # the library checks it too, but knows only the axes' names
-        check_param("--up", OneOf(UP_CHOICES), up)
+    check_up_option(up)
+    fmt = cloud_format(format, "segment")
     cfg = load_config(config, set_)
     check_output_folder(out)  # before any work
     with reporting():
-        cloud = read_cloud(path, format=format)
+        cloud = read_scan(path, fmt)
         seg = run_segment(cloud, cfg, seed=seed, up=up, scale=scale)
         ply, js = write_segmentation(seg, out)
     if state.quiet:

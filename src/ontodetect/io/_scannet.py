@@ -23,6 +23,7 @@ numbering VoteNet's preprocessing uses.
 from __future__ import annotations
 
 import json
+import os
 import re
 import warnings
 from pathlib import Path
@@ -38,13 +39,15 @@ from . import read_cloud  # the PLY reader goes through the registry
 from ._labels import UNANNOTATED, nyu40_name, read_scannet_label_map
 from ._text import _to_colors
 
-__all__ = ["read_scannet", "read_scannet_votenet"]
+__all__ = ["read_scannet", "read_scannet_votenet", "votenet_label_files"]
 
 MESH_SUFFIX = "_vh_clean_2.ply"
 SEGS_SUFFIX = "_vh_clean_2.0.010000.segs.json"
 AGGREGATION_SUFFIXES = (".aggregation.json", "_vh_clean.aggregation.json")
 LABEL_TABLE = "scannetv2-labels.combined.tsv"
 VOTENET_SUFFIXES = ("_vert.npy", "_sem_label.npy", "_ins_label.npy", "_bbox.npy")
+#: A VoteNet scan's label files and the fields they become.
+VOTENET_LABELS = (("_sem_label.npy", "class_id"), ("_ins_label.npy", "instance"))
 #: Columns of a VoteNet box: centre (3), size (3), NYU40 id.
 BOX_COLUMNS = 7
 #: Bytes of an .npy header read before trusting its shape.
@@ -475,10 +478,12 @@ def read_scannet_votenet(
     fields: dict[str, NDArray[Any]] = {f"col{i}": vert[:, i] for i in range(6, vert.shape[1])}
     meta: dict[str, Any] = {"source": str(path), "scene_id": scene}
     if labels:
-        for suffix, key in (("_sem_label.npy", "class_id"), ("_ins_label.npy", "instance")):
+        for suffix, key in VOTENET_LABELS:
             f = folder / f"{scene}{suffix}"
             if not f.is_file():
-                raise ReadError(f, "missing: pass labels=False to read the points only")
+                raise ReadError(
+                    f, "missing: it holds the scan's labels (labels=False reads the points only)"
+                )
             fields[key] = _label_array(f, n, vert_file)
         meta.update(_instance_meta(fields["instance"], fields["class_id"]))
     box_file = folder / f"{scene}_bbox.npy"
@@ -493,3 +498,33 @@ def read_scannet_votenet(
         on_nonfinite=on_nonfinite,
         copy=False,
     )
+
+
+def votenet_label_files(path: str | os.PathLike[str]) -> list[Path]:
+    """The files that hold the labels of the VoteNet ScanNet scan ``path`` belongs to.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        ``<scene>_vert.npy`` or one of its siblings.
+
+    Returns
+    -------
+    list of Path
+        ``<scene>_sem_label.npy`` and ``<scene>_ins_label.npy`` beside ``path``, whether
+        they exist or not (:func:`read_scannet_votenet` with ``labels=True`` needs both);
+        empty when the name is not one of this layout.
+
+    Examples
+    --------
+    >>> [p.name for p in votenet_label_files("scans/scene0001_00_vert.npy")]
+    ['scene0001_00_sem_label.npy', 'scene0001_00_ins_label.npy']
+    >>> votenet_label_files("room.ply")
+    []
+    """
+    path = Path(path)
+    name = path.name
+    scene = next((name[: -len(s)] for s in VOTENET_SUFFIXES if name.endswith(s)), None)
+    if scene is None:
+        return []
+    return [path.with_name(f"{scene}{suffix}") for suffix, _ in VOTENET_LABELS]

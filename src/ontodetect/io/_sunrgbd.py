@@ -20,6 +20,7 @@ evaluate both.
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import Any
 
@@ -32,7 +33,7 @@ from ._labels import nyu40_name
 from ._numpy import read_npz
 from ._scannet import _box_table, _load_npy
 
-__all__ = ["SUNRGBD_CLASSES", "boxes_to_labels", "read_sunrgbd_votenet"]
+__all__ = ["SUNRGBD_CLASSES", "boxes_to_labels", "read_sunrgbd_votenet", "sunrgbd_label_files"]
 
 #: VoteNet's ten SUN RGB-D classes in index order, with their NYU40 ids.
 SUNRGBD_CLASSES: tuple[tuple[str, int], ...] = (
@@ -166,7 +167,10 @@ def read_sunrgbd_votenet(
         return cloud.with_meta(**meta)
     box_file = path.parent / f"{frame}{BOXES}"
     if not box_file.is_file():
-        raise ReadError(box_file, "missing: pass labels=False to read the points only")
+        raise ReadError(
+            box_file,
+            "missing: its boxes label the frame's points (labels=False reads the points only)",
+        )
     boxes = _read_boxes(box_file)
     instance, class_id = boxes_to_labels(cloud.xyz, boxes)
     nyu = _nyu40(boxes)
@@ -182,3 +186,30 @@ def read_sunrgbd_votenet(
     meta["instance_labels"] = {i: nyu40_name(c) for i, c in meta["instance_class_ids"].items()}
     fields = {**cloud.fields, "instance": instance, "class_id": class_id}
     return cloud.replace(fields=fields).with_meta(**meta)
+
+
+def sunrgbd_label_files(path: str | os.PathLike[str]) -> list[Path]:
+    """The file that holds the labels of the VoteNet SUN RGB-D frame ``path`` belongs to.
+
+    Parameters
+    ----------
+    path : str or PathLike
+        ``<id>_pc.npz`` or one of its siblings.
+
+    Returns
+    -------
+    list of Path
+        ``<id>_bbox.npy`` beside ``path``, whether it exists or not
+        (:func:`read_sunrgbd_votenet` with ``labels=True`` needs it); empty when the name
+        is not one of this layout.
+
+    Examples
+    --------
+    >>> [p.name for p in sunrgbd_label_files("frames/000001_pc.npz")]
+    ['000001_bbox.npy']
+    >>> sunrgbd_label_files("room.npz")
+    []
+    """
+    path = Path(path)
+    frame = next((path.name[: -len(s)] for s in SUFFIXES if path.name.endswith(s)), None)
+    return [] if frame is None else [path.with_name(f"{frame}{BOXES}")]
