@@ -284,6 +284,10 @@ def test_write_object_map(fits, tmp_path):
     )
     none = write_object_map([], tmp_path / "empty", glb=False, mesh=False)
     assert b"element vertex 0" in none.points.read_bytes() and none.glb is None
+    # No object: the map and the mesh are empty, and there is no GLB (not a crash).
+    empty = write_object_map([], tmp_path / "empty2")
+    assert empty.glb is None and not (tmp_path / "empty2" / "object_map.glb").exists()
+    assert empty.mesh is not None and empty.mesh.is_file()
 
 
 def test_cad_dict_is_the_contract():

@@ -1190,7 +1190,7 @@ def write_object_map(
     spacing, seed :
         Sampling of the point map (:func:`object_map_cloud`).
     glb, mesh : bool
-        Write the GLB scene and the PLY mesh.
+        Write the GLB scene (not when there is no object) and the PLY mesh.
 
     Returns
     -------
@@ -1204,7 +1204,7 @@ def write_object_map(
     )
     parts = object_map_meshes(fits)
     glb_path = mesh_path = None
-    if glb:
+    if glb and parts:  # glTF readers take an empty scene, trimesh will not write one
         up = fits[0].up if fits else np.array([0.0, 0.0, 1.0])
         to_gltf = _y_up(np.asarray(up, dtype=np.float64))
         scene = trimesh.Scene()
