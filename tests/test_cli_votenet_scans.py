@@ -99,6 +99,19 @@ def test_detect_reads_a_scan_without_label_files_for_its_points(
     assert doc["detections"] == labelled_detections["detections"]
 
 
+def test_a_batch_and_tiles_read_a_scan_without_label_files_too(scans, tmp_path, capsys):
+    bare = scans / "bare" / f"{SCENE}_vert.npy"
+    labelled = scans / "labelled" / f"{SCENE}_vert.npy"
+    out = tmp_path / "batch"
+    assert main(["-q", "detect", str(bare), str(labelled), "-o", str(out), "--votes", "1"]) == 0
+    same = [(out / name / "detections.json").read_bytes() for name in (SCENE, f"{SCENE}_2")]
+    assert same[0].replace(b"bare", b"labelled") == same[1]
+    tiles = tmp_path / "tiles"
+    args = ["-q", "detect", str(bare), "-o", str(tiles), "--tile", "4", "--set", "detect.votes=1"]
+    assert main(args) == 0
+    assert (tiles / "detections.json").is_file()
+
+
 def test_a_frame_without_boxes_is_read_for_its_points(room, scans, capsys):
     frame = scans / "frame" / f"{FRAME}_pc.npz"
     assert main(["info", "-f", "sunrgbd", str(frame)]) == 0

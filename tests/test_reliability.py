@@ -243,7 +243,7 @@ def test_an_output_folder_that_is_a_file_is_refused_before_any_work(
         raise AssertionError("the scan was read before the output folder was checked")
 
     monkeypatch.setattr(io, "read_cloud", no_reading)
-    monkeypatch.setattr("ontodetect.cli._clouds.read_cloud", no_reading)  # the commands' reader
+    monkeypatch.setattr(f"ontodetect.cli.{command}.read_points", no_reading)  # its reader
     (tmp_path / "afile").write_text("")
     status = main([command, str(room[0]), "-o", str(tmp_path / "afile")])
     one_line(capsys, status, "afile", "is a file, not a folder")

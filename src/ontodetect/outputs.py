@@ -26,7 +26,7 @@ from .io import (
     EXPORTERS,
     atomic_write_text,
     export_detections,
-    read_cloud,
+    read_points,
     staged_folder,
     write_cloud,
     write_mesh,
@@ -335,7 +335,7 @@ def detect_file(
     :func:`write_outputs`. Picklable arguments in, paths out: any map over scans
     (``ontodetect.evaluation.map_scenes``, ``detect --jobs``) can run it.
     """
-    result = detect(read_cloud(path, format=format), **(detect_options or {}))
+    result = detect(read_points(path, format=format), **(detect_options or {}))
     return write_outputs(result, out_dir, **write_options)
 
 

@@ -10,10 +10,10 @@ import typer
 from rich.table import Table
 
 from ..errors import InvalidParameterError
-from ..io import atomic_write, check_output_folder, staged_folder
+from ..io import atomic_write, check_output_folder, read_points, staged_folder
 from ..io._detections import read_detections, write_detections
 from . import app
-from ._clouds import FORMAT_HELP, cloud_format, read_scan
+from ._clouds import FORMAT_HELP, cloud_format
 from ._console import console, reporting, state
 from ._defaults import KERNELS, MIN_SCORE
 
@@ -78,7 +78,7 @@ def fit(
     lib = load_library(models, models_only)
     doc = read_detections(detections)
     with reporting():
-        cloud = read_scan(path, fmt)
+        cloud = read_points(path, fmt)
         fits = fit_document(
             doc, cloud, lib, min_score=min_score, seed=seed, scale_to_object=scale, kernel=kernel
         )

@@ -13,9 +13,9 @@ from rich.text import Text
 from ..cloud import as_position
 from ..errors import OntoDetectError
 from ..geometry import jsonable
-from ..io import check_output_folder, expand_inputs
+from ..io import check_output_folder, expand_inputs, read_points
 from . import app
-from ._clouds import FORMAT_HELP, cloud_format, read_scan
+from ._clouds import FORMAT_HELP, cloud_format
 from ._common import (
     SCHEDULER_HELP,
     WORKERS_HELP,
@@ -264,7 +264,7 @@ def detect(
         return
     path = inputs[0]
     with reporting():
-        cloud = read_scan(path, fmt)
+        cloud = read_points(path, fmt)
         result = run_detect(
             cloud,
             config=cfg,

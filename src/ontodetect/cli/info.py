@@ -11,9 +11,10 @@ import typer
 from rich.table import Table
 
 from ..errors import ReadError
+from ..io import read_points
 from ..io._labels import nyu40_name
 from . import app
-from ._clouds import FORMAT_HELP, cloud_format, read_scan
+from ._clouds import FORMAT_HELP, cloud_format
 from ._console import console, reporting
 
 #: Layouts of one scan per file, as named in ``--format`` (VoteNet's): a folder of them is a
@@ -99,7 +100,7 @@ def info(
             f"{SCAN_FILES[fmt]} file); 'ontodetect eval -f {format}' reads a dataset folder",
         )
     with reporting():
-        cloud = read_scan(path, fmt)
+        cloud = read_points(path, fmt)
     summary = describe_cloud(cloud)
     if as_json:
         typer.echo(json.dumps(summary.to_dict(), indent=2))

@@ -10,9 +10,9 @@ import numpy as np
 import typer
 from rich.table import Table
 
-from ..io import atomic_write_text, check_output_folder, staged_folder, write_cloud
+from ..io import atomic_write_text, check_output_folder, read_points, staged_folder, write_cloud
 from . import app
-from ._clouds import FORMAT_HELP, cloud_format, read_scan
+from ._clouds import FORMAT_HELP, cloud_format
 from ._common import check_up_option, load_config
 from ._console import console, reporting, state
 
@@ -92,7 +92,7 @@ def segment(
     cfg = load_config(config, set_)
     check_output_folder(out)  # before any work
     with reporting():
-        cloud = read_scan(path, fmt)
+        cloud = read_points(path, fmt)
         seg = run_segment(cloud, cfg, seed=seed, up=up, scale=scale)
         ply, js = write_segmentation(seg, out)
     if state.quiet:

@@ -26,7 +26,13 @@ from pathlib import Path
 from typing import Any
 
 from ..cloud import PointCloud
-from ..errors import CorruptFileError, ReadError, UnsupportedFormatError, WriteError
+from ..errors import (
+    CorruptFileError,
+    OntoDetectError,
+    ReadError,
+    UnsupportedFormatError,
+    WriteError,
+)
 from ._arrays import read_array_archive, write_array_archive
 from ._atomic import (
     RUN_MARKER,
@@ -81,6 +87,7 @@ __all__ = [
     "read_cloud",
     "read_detections",
     "read_image",
+    "read_points",
     "read_scannet_instances",
     "staged_folder",
     "supported_formats",
@@ -345,6 +352,47 @@ def read_cloud(
     meta = {"source": str(p), "format": fmt}
     meta.update({k: v for k, v in cloud.meta.items() if k not in meta})
     return cloud.with_meta(**meta)
+
+
+def read_points(
+    path: str | os.PathLike[str], format: str | None = None, **options: Any
+) -> PointCloud:
+    """:func:`read_cloud`, but a scan of a VoteNet layout whose label files are missing (a
+    ScanNet test scan, a SUN RGB-D frame without boxes) is read without its labels: what
+    detection needs is the points (``detect``, ``segment``, ``info``, a batch, tiles).
+
+    ``format`` is a reader's name or None (guessed from the path); ``options`` go to the
+    reader, as :func:`read_cloud`'s do.
+    """
+    from ._scannet import votenet_label_files  # lazy: the registry imports these by name
+    from ._sunrgbd import sunrgbd_label_files
+
+    label_files = {
+        "scannet-votenet": votenet_label_files,
+        "sunrgbd-votenet": sunrgbd_label_files,
+    }
+    p = Path(path)
+    if not _is_file(p):  # read_cloud says what is wrong with it
+        return read_cloud(p, format=format, **options)
+    layout = format
+    if layout is None:
+        try:
+            layout = detect_format(p)
+        except OntoDetectError:  # read_cloud says it, after its own checks of the path
+            return read_cloud(p, format=format, **options)
+    needed = label_files[layout](p) if layout in label_files else []
+    if not all(_is_file(f) for f in needed):
+        return read_cloud(p, format=format, labels=False, **options)
+    return read_cloud(p, format=format, **options)
+
+
+def _is_file(path: Path) -> bool:
+    """``path.is_file()``, False where it cannot be looked at (a folder on the way that
+    cannot be entered raises PermissionError from ``is_file``)."""
+    try:
+        return path.is_file()
+    except OSError:
+        return False
 
 
 def write_cloud(

@@ -135,9 +135,9 @@ def iter_chunks(
 
 
 def _whole_chunks(path: Path, fmt: str, chunk_points: int) -> Iterator[Chunk]:
-    from . import read_cloud  # lazy: the registry imports this module's readers by name
+    from . import read_points  # lazy: the registry imports this module's readers by name
 
-    cloud = read_cloud(path, format=fmt, on_nonfinite="drop")
+    cloud = read_points(path, format=fmt, on_nonfinite="drop")
     rows = cloud.index
     # Rows dropped by the reader (non-finite) leave gaps: hand out runs of kept rows.
     for a in range(0, len(cloud), chunk_points):
