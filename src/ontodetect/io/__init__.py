@@ -365,7 +365,7 @@ def read_points(
     reader, as :func:`read_cloud`'s do.
     """
     from ._scannet import votenet_label_files  # lazy: the registry imports these by name
-    from ._sunrgbd import sunrgbd_label_files
+    from ._sunrgbd import sunrgbd_label_files  # lazy: as above
 
     label_files = {
         "scannet-votenet": votenet_label_files,
