@@ -11,7 +11,7 @@ import pytest
 from ontodetect import CorruptFileError, ReadError, read_cloud
 from ontodetect.io import detect_format
 from ontodetect.io._labels import read_scannet_label_map
-from ontodetect.io._scannet import read_scannet, read_scannet_votenet, votenet_label_files
+from ontodetect.io._scannet import read_scannet, read_scannet_votenet
 
 SCENE = "scene0042_00"
 # Vertex -> segment, and the objects of the aggregation (objectId, label, segments).
@@ -242,14 +242,14 @@ def test_votenet_points_only(tmp_path):
     assert dict(read_scannet_votenet(f, labels=False).fields) == {}
 
 
-@pytest.mark.parametrize("suffix", ["_vert.npy", "_sem_label.npy", "_ins_label.npy", "_bbox.npy"])
-def test_votenet_label_files_of_every_file_of_a_scan(tmp_path, suffix):
-    f = tmp_path / f"{SCENE}{suffix}"
-    assert votenet_label_files(f) == [
-        tmp_path / f"{SCENE}_sem_label.npy",
-        tmp_path / f"{SCENE}_ins_label.npy",
-    ]
-    assert votenet_label_files(tmp_path / f"{SCENE}.ply") == []
+@pytest.mark.parametrize("missing", [None, "_sem_label.npy", "_ins_label.npy"])
+def test_votenet_labels_when_present(tmp_path, missing):
+    """``labels=None`` reads the labels when both label files are there, else the points."""
+    f = make_votenet_scan(tmp_path)
+    if missing is not None:
+        (tmp_path / f"{SCENE}{missing}").unlink()
+    fields = set(read_scannet_votenet(f, labels=None).fields)
+    assert fields == (set() if missing else {"class_id", "instance"})
 
 
 def test_votenet_lengths_disagree(tmp_path):

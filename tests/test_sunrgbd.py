@@ -18,7 +18,7 @@ from ontodetect.errors import CorruptFileError, ReadError
 from ontodetect.evaluation import discover_scenes, evaluate_dataset, load_scene
 from ontodetect.geometry import box_corners
 from ontodetect.io import detect_format, expand_inputs, read_cloud
-from ontodetect.io._sunrgbd import SUNRGBD_CLASSES, boxes_to_labels, sunrgbd_label_files
+from ontodetect.io._sunrgbd import SUNRGBD_CLASSES, boxes_to_labels, read_sunrgbd_votenet
 
 CHAIR, TABLE = 3, 1  # VoteNet's class indices
 
@@ -122,8 +122,8 @@ def test_a_frame_without_boxes_reads_as_points_but_is_no_labelled_scene(tmp_path
     np.savez_compressed(tmp_path / "000003_pc.npz", pc=np.zeros((3, 6), np.float32))
     with pytest.raises(ReadError, match=r"000003_bbox\.npy: missing: its boxes label"):
         read_cloud(tmp_path / "000003_pc.npz", format="sunrgbd-votenet")
-    assert sunrgbd_label_files(tmp_path / "000003_pc.npz") == [tmp_path / "000003_bbox.npy"]
-    assert sunrgbd_label_files(tmp_path / "000003.npz") == []
+    # labels=None labels the points when the box file is there (read_points' choice)
+    assert dict(read_sunrgbd_votenet(tmp_path / "000003_pc.npz", labels=None).fields) == {}
     assert len(read_cloud(tmp_path / "000003_pc.npz")) == 3
     with pytest.raises(ReadError, match="holds no scene"):
         discover_scenes(tmp_path)
@@ -197,3 +197,10 @@ def test_eval_on_the_command_line_names_the_layout(frames, tmp_path, capsys):
     assert "2 scenes" in capsys.readouterr().out
     doc = json.loads((out / "report.json").read_text(encoding="utf-8"))
     assert [s["scene"] for s in doc["scenes"]] == ["000002", "000003"]
+
+
+def test_labels_when_present_reads_the_boxes_of_a_frame_that_has_them(tmp_path):
+    np.savez_compressed(tmp_path / "000004_pc.npz", pc=np.array([[0, 2, 0.4, 0.5, 0.5, 0.5]]))
+    np.save(tmp_path / "000004_bbox.npy", np.array([[0, 2, 0.4, 0.3, 0.3, 0.45, 0.0, 3]]))
+    cloud = read_sunrgbd_votenet(tmp_path / "000004_pc.npz", labels=None)
+    assert cloud.fields["class_id"].tolist() == [5]

@@ -354,6 +354,11 @@ def read_cloud(
     return cloud.with_meta(**meta)
 
 
+#: Layouts whose reader, given ``labels=None``, reads its labels only when their files are
+#: there (:func:`read_points`).
+LABELS_WHEN_PRESENT = ("scannet-votenet", "sunrgbd-votenet")
+
+
 def read_points(
     path: str | os.PathLike[str], format: str | None = None, **options: Any
 ) -> PointCloud:
@@ -364,35 +369,15 @@ def read_points(
     ``format`` is a reader's name or None (guessed from the path); ``options`` go to the
     reader, as :func:`read_cloud`'s do.
     """
-    from ._scannet import votenet_label_files  # lazy: the registry imports these by name
-    from ._sunrgbd import sunrgbd_label_files  # lazy: as above
-
-    label_files = {
-        "scannet-votenet": votenet_label_files,
-        "sunrgbd-votenet": sunrgbd_label_files,
-    }
-    p = Path(path)
-    if not _is_file(p):  # read_cloud says what is wrong with it
-        return read_cloud(p, format=format, **options)
     layout = format
     if layout is None:
         try:
-            layout = detect_format(p)
-        except OntoDetectError:  # read_cloud says it, after its own checks of the path
-            return read_cloud(p, format=format, **options)
-    needed = label_files[layout](p) if layout in label_files else []
-    if not all(_is_file(f) for f in needed):
-        return read_cloud(p, format=format, labels=False, **options)
-    return read_cloud(p, format=format, **options)
-
-
-def _is_file(path: Path) -> bool:
-    """``path.is_file()``, False where it cannot be looked at (a folder on the way that
-    cannot be entered raises PermissionError from ``is_file``)."""
-    try:
-        return path.is_file()
-    except OSError:
-        return False
+            layout = detect_format(path)
+        except (OntoDetectError, OSError):  # read_cloud says it, after its checks of the path
+            layout = None
+    if layout in LABELS_WHEN_PRESENT:
+        options = {"labels": None, **options}
+    return read_cloud(path, format=format, **options)
 
 
 def write_cloud(

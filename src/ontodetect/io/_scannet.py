@@ -23,7 +23,6 @@ numbering VoteNet's preprocessing uses.
 from __future__ import annotations
 
 import json
-import os
 import re
 import warnings
 from pathlib import Path
@@ -39,7 +38,7 @@ from . import read_cloud  # the PLY reader goes through the registry
 from ._labels import UNANNOTATED, nyu40_name, read_scannet_label_map
 from ._text import _to_colors
 
-__all__ = ["read_scannet", "read_scannet_votenet", "votenet_label_files"]
+__all__ = ["read_scannet", "read_scannet_votenet"]
 
 MESH_SUFFIX = "_vh_clean_2.ply"
 SEGS_SUFFIX = "_vh_clean_2.0.010000.segs.json"
@@ -404,7 +403,7 @@ def _label_array(path: Path, n: int, vert: Path) -> NDArray[np.int32]:
 
 
 def read_scannet_votenet(
-    path: Path, *, labels: bool = True, on_nonfinite: str = "warn"
+    path: Path, *, labels: bool | None = True, on_nonfinite: str = "warn"
 ) -> PointCloud:
     """Read a ScanNet scan as preprocessed for VoteNet (``*_vert.npy`` and siblings).
 
@@ -412,9 +411,10 @@ def read_scannet_votenet(
     ----------
     path : Path
         ``<scene>_vert.npy``, or its ``_sem_label.npy`` / ``_ins_label.npy`` sibling.
-    labels : bool
+    labels : bool or None
         Read ``_sem_label.npy`` and ``_ins_label.npy`` (they must exist); False
-        reads the points only.
+        reads the points only; None reads them when both are there (a test scan has
+        none).
     on_nonfinite : {"warn", "drop", "raise"}
         Passed to :func:`~ontodetect.point_cloud`.
 
@@ -477,6 +477,8 @@ def read_scannet_votenet(
         rgb = _to_colors(vert_file, vert[:, 3:6], ["r", "g", "b"])
     fields: dict[str, NDArray[Any]] = {f"col{i}": vert[:, i] for i in range(6, vert.shape[1])}
     meta: dict[str, Any] = {"source": str(path), "scene_id": scene}
+    if labels is None:
+        labels = all((folder / f"{scene}{suffix}").is_file() for suffix, _ in VOTENET_LABELS)
     if labels:
         for suffix, key in VOTENET_LABELS:
             f = folder / f"{scene}{suffix}"
@@ -498,33 +500,3 @@ def read_scannet_votenet(
         on_nonfinite=on_nonfinite,
         copy=False,
     )
-
-
-def votenet_label_files(path: str | os.PathLike[str]) -> list[Path]:
-    """The files that hold the labels of the VoteNet ScanNet scan ``path`` belongs to.
-
-    Parameters
-    ----------
-    path : str or PathLike
-        ``<scene>_vert.npy`` or one of its siblings.
-
-    Returns
-    -------
-    list of Path
-        ``<scene>_sem_label.npy`` and ``<scene>_ins_label.npy`` beside ``path``, whether
-        they exist or not (:func:`read_scannet_votenet` with ``labels=True`` needs both);
-        empty when the name is not one of this layout.
-
-    Examples
-    --------
-    >>> [p.name for p in votenet_label_files("scans/scene0001_00_vert.npy")]
-    ['scene0001_00_sem_label.npy', 'scene0001_00_ins_label.npy']
-    >>> votenet_label_files("room.ply")
-    []
-    """
-    path = Path(path)
-    name = path.name
-    scene = next((name[: -len(s)] for s in VOTENET_SUFFIXES if name.endswith(s)), None)
-    if scene is None:
-        return []
-    return [path.with_name(f"{scene}{suffix}") for suffix, _ in VOTENET_LABELS]

@@ -20,7 +20,6 @@ evaluate both.
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import Any
 
@@ -33,7 +32,7 @@ from ._labels import nyu40_name
 from ._numpy import read_npz
 from ._scannet import _box_table, _load_npy
 
-__all__ = ["SUNRGBD_CLASSES", "boxes_to_labels", "read_sunrgbd_votenet", "sunrgbd_label_files"]
+__all__ = ["SUNRGBD_CLASSES", "boxes_to_labels", "read_sunrgbd_votenet"]
 
 #: VoteNet's ten SUN RGB-D classes in index order, with their NYU40 ids.
 SUNRGBD_CLASSES: tuple[tuple[str, int], ...] = (
@@ -112,7 +111,7 @@ def _read_boxes(path: Path) -> NDArray[np.float64]:
 
 
 def read_sunrgbd_votenet(
-    path: Path, *, labels: bool = True, on_nonfinite: str = "warn"
+    path: Path, *, labels: bool | None = True, on_nonfinite: str = "warn"
 ) -> PointCloud:
     """Read a SUN RGB-D frame as preprocessed for VoteNet (``<id>_pc.npz`` and siblings).
 
@@ -120,9 +119,9 @@ def read_sunrgbd_votenet(
     ----------
     path : Path
         ``<id>_pc.npz``, or its ``_bbox.npy`` / ``_votes.npz`` sibling.
-    labels : bool
+    labels : bool or None
         Read ``<id>_bbox.npy`` (it must exist) and label the points inside its boxes;
-        False reads the points only.
+        False reads the points only; None labels them when the box file is there.
     on_nonfinite : {"warn", "drop", "raise"}
         Passed to :func:`~ontodetect.point_cloud`.
 
@@ -163,9 +162,11 @@ def read_sunrgbd_votenet(
         raise ReadError(pc_file, "missing: the points of the frame are needed")
     cloud = read_npz(pc_file, on_nonfinite=on_nonfinite)
     meta: dict[str, Any] = {"source": str(path), "scene_id": frame}
+    box_file = path.parent / f"{frame}{BOXES}"
+    if labels is None:
+        labels = box_file.is_file()
     if not labels:
         return cloud.with_meta(**meta)
-    box_file = path.parent / f"{frame}{BOXES}"
     if not box_file.is_file():
         raise ReadError(
             box_file,
@@ -186,30 +187,3 @@ def read_sunrgbd_votenet(
     meta["instance_labels"] = {i: nyu40_name(c) for i, c in meta["instance_class_ids"].items()}
     fields = {**cloud.fields, "instance": instance, "class_id": class_id}
     return cloud.replace(fields=fields).with_meta(**meta)
-
-
-def sunrgbd_label_files(path: str | os.PathLike[str]) -> list[Path]:
-    """The file that holds the labels of the VoteNet SUN RGB-D frame ``path`` belongs to.
-
-    Parameters
-    ----------
-    path : str or PathLike
-        ``<id>_pc.npz`` or one of its siblings.
-
-    Returns
-    -------
-    list of Path
-        ``<id>_bbox.npy`` beside ``path``, whether it exists or not
-        (:func:`read_sunrgbd_votenet` with ``labels=True`` needs it); empty when the name
-        is not one of this layout.
-
-    Examples
-    --------
-    >>> [p.name for p in sunrgbd_label_files("frames/000001_pc.npz")]
-    ['000001_bbox.npy']
-    >>> sunrgbd_label_files("room.npz")
-    []
-    """
-    path = Path(path)
-    frame = next((path.name[: -len(s)] for s in SUFFIXES if path.name.endswith(s)), None)
-    return [] if frame is None else [path.with_name(f"{frame}{BOXES}")]
