@@ -441,8 +441,12 @@ def _detect_with_rows(fn, units, pool, names) -> list[dict]:
 
 def _detect_tiled(path, out, *, tile, overlap, executor, as_json, format, exports, detect_options):
     """``detect --tile``: one large scan tile by tile; detections.json and the exports."""
-    from ..io import export_detections, write_detections  # lazy: CLI start-up
-    from ..io._atomic import atomic_write_text, staged_folder  # lazy: CLI start-up
+    from ..io import (  # lazy: CLI start-up
+        atomic_write_text,
+        export_detections,
+        staged_folder,
+        write_detections,
+    )
     from ..pipeline import detect_tiled  # lazy: CLI start-up
 
     with reporting(), executor_option(*executor) as pool:

@@ -149,11 +149,7 @@ def _remove_stale(parent: Path, name: str) -> None:
             with contextlib.suppress(OSError):
                 os.rename(entry, out)
                 continue
-        if entry.is_dir() and not entry.is_symlink():
-            shutil.rmtree(entry, ignore_errors=True)
-        else:
-            with contextlib.suppress(OSError):
-                entry.unlink()
+        _remove(entry)
 
 
 def _run_files(folder: Path) -> set[str] | None:
@@ -182,11 +178,7 @@ def _commit(stage: Path, out: Path, what: str, keep_earlier: bool = False) -> No
     if not keep_earlier and ours and present <= ours | {RUN_MARKER}:
         # Only an earlier run's files: swap the folders. Killed between the two renames,
         # the next run puts the old folder back (_remove_stale).
-        old = Path(tempfile.mkdtemp(prefix=f".{out.name}.old-", dir=out.parent))
-        os.rmdir(old)
-        os.rename(out, old)
-        os.rename(stage, out)
-        shutil.rmtree(old, ignore_errors=True)
+        _swap_folder(stage, out)
         return
     # A folder with other files too (the user's): replace our files one by one, checked
     # first so that nothing is changed when one cannot be, and the marker last. A folder
@@ -198,17 +190,24 @@ def _commit(stage: Path, out: Path, what: str, keep_earlier: bool = False) -> No
     for n in names:
         target = out / n
         if target.is_dir() and not target.is_symlink():
-            aside = Path(tempfile.mkdtemp(prefix=f".{n}.old-", dir=out))
-            os.rmdir(aside)
-            os.rename(target, aside)
-            os.replace(stage / n, target)
-            shutil.rmtree(aside, ignore_errors=True)
+            _swap_folder(stage / n, target)
         else:
             os.replace(stage / n, target)
     for n in sorted(ours - set(names) - set(kept) - {RUN_MARKER}):
         _remove(out / n)
     os.replace(stage / RUN_MARKER, out / RUN_MARKER)
     shutil.rmtree(stage, ignore_errors=True)
+
+
+def _swap_folder(new: Path, target: Path) -> None:
+    """``new`` in the place of the folder ``target``: the old one moved aside first (as
+    ``.NAME.old-*``, which :func:`_remove_stale` puts back if a kill comes between the two
+    renames), then removed."""
+    old = Path(tempfile.mkdtemp(prefix=f".{target.name}.old-", dir=target.parent))
+    os.rmdir(old)
+    os.rename(target, old)
+    os.rename(new, target)
+    shutil.rmtree(old, ignore_errors=True)
 
 
 def _write_marker(stage: Path, names: list[str]) -> None:
