@@ -9,7 +9,6 @@ same input and seed.
 
 from __future__ import annotations
 
-import json
 import math
 import os
 from collections.abc import Callable, Sequence
@@ -24,12 +23,13 @@ from .cloud import PointCloud
 from .errors import InvalidParameterError
 from .io import (
     EXPORTERS,
-    atomic_write_text,
+    MIN_SCAN_POINTS,
     export_detections,
     read_points,
     staged_folder,
     write_cloud,
     write_mesh,
+    write_timings,
 )
 from .io._detections import write_detections
 from .pipeline import Result, detect
@@ -291,7 +291,7 @@ def _write_files(
     # Seconds differ between two runs; the contract file does not.
     timings = doc.pop("timings", {})
     det_path = write_detections(out / "detections.json", doc)
-    atomic_write_text(out / "timings.json", json.dumps(timings, indent=2) + "\n")
+    write_timings(out / "timings.json", timings)
     exported = export_detections(out, doc, tuple(exports))
     label, _ = result.point_labels()
     cloud = result.cloud
@@ -333,9 +333,12 @@ def detect_file(
     ``detect_options`` are keyword arguments of :func:`ontodetect.pipeline.detect`
     (``config``, ``ontology``, ``room``, ``seed``...); ``write_options`` those of
     :func:`write_outputs`. Picklable arguments in, paths out: any map over scans
-    (``ontodetect.evaluation.map_scenes``, ``detect --jobs``) can run it.
+    (``ontodetect.evaluation.map_scenes``, ``detect --jobs``) can run it. A scan with
+    fewer than :data:`~ontodetect.io.MIN_SCAN_POINTS` points is refused
+    (:class:`~ontodetect.errors.ReadError`).
     """
-    result = detect(read_points(path, format=format), **(detect_options or {}))
+    cloud = read_points(path, format=format, min_points=MIN_SCAN_POINTS)
+    result = detect(cloud, **(detect_options or {}))
     return write_outputs(result, out_dir, **write_options)
 
 

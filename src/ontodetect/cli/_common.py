@@ -126,6 +126,19 @@ def check_executor_options(scheduler: str | None, workers: int | None, jobs: int
         check_param("jobs", Nullable(COUNT), jobs)
 
 
+def refuse_executor_options(scheduler: str | None, workers: int | None, jobs: int) -> None:
+    """One scan without ``--tile`` runs in this process: ``--scheduler``, ``--workers`` or
+    ``--jobs`` other than 1 would be left unused, so the first given is an error."""
+    given = {"scheduler": scheduler, "workers": workers, "jobs": None if jobs == 1 else jobs}
+    for name, value in given.items():
+        if value is not None:
+            raise InvalidParameterError(
+                EXECUTOR_OPTIONS[name],
+                "given only with several scans or --tile (one scan runs in this process)",
+                value,
+            )
+
+
 def executor_option(scheduler: str | None, workers: int | None, jobs: int | None = None) -> Any:
     """The executor ``--scheduler``, ``--workers`` or ``--jobs`` ask for (an open one: use
     it in a ``with`` block); errors name the option."""

@@ -13,7 +13,7 @@ from rich.text import Text
 from ..cloud import as_position
 from ..errors import OntoDetectError
 from ..geometry import jsonable
-from ..io import check_output_folder, expand_inputs, read_points
+from ..io import MIN_SCAN_POINTS, check_output_folder, expand_inputs, read_points
 from . import app
 from ._clouds import FORMAT_HELP, cloud_format
 from ._common import (
@@ -25,6 +25,7 @@ from ._common import (
     load_config,
     load_ontology_option,
     number_list,
+    refuse_executor_options,
     room_option,
 )
 from ._console import console, err_console, reporting, showing_progress, state
@@ -41,7 +42,10 @@ def detect(
     ),
     out: Path = typer.Option(..., "--out", "-o", help="Output folder."),
     jobs: int = typer.Option(
-        1, "--jobs", "-j", help="Scans in parallel on a local cluster (0: one per CPU)."
+        1,
+        "--jobs",
+        "-j",
+        help="Scans (or tiles, with --tile) in parallel on a local cluster (0: one per CPU).",
     ),
     tile: float | None = typer.Option(
         None,
@@ -262,9 +266,10 @@ def detect(
             mesh=mesh,
         )
         return
+    refuse_executor_options(scheduler, workers, jobs)  # before reading the scan
     path = inputs[0]
     with reporting():
-        cloud = read_points(path, fmt)
+        cloud = read_points(path, fmt, min_points=MIN_SCAN_POINTS)
         result = run_detect(
             cloud,
             config=cfg,
@@ -442,10 +447,10 @@ def _detect_with_rows(fn, units, pool, names) -> list[dict]:
 def _detect_tiled(path, out, *, tile, overlap, executor, as_json, format, exports, detect_options):
     """``detect --tile``: one large scan tile by tile; detections.json and the exports."""
     from ..io import (  # lazy: CLI start-up
-        atomic_write_text,
         export_detections,
         staged_folder,
         write_detections,
+        write_timings,
     )
     from ..pipeline import detect_tiled  # lazy: CLI start-up
 
@@ -457,7 +462,7 @@ def _detect_tiled(path, out, *, tile, overlap, executor, as_json, format, export
     contract, timings = _tiled_timings(doc)
     with staged_folder(out, "output folder") as stage:
         write_detections(stage / "detections.json", contract)
-        atomic_write_text(stage / "timings.json", json.dumps(timings, indent=2) + "\n")
+        write_timings(stage / "timings.json", timings)
         exported = export_detections(stage, contract, exports)
     written = [out / "detections.json", out / "timings.json"]
     written += [out / p.relative_to(stage) for p in exported]

@@ -10,7 +10,15 @@ import numpy as np
 import typer
 from rich.table import Table
 
-from ..io import atomic_write_text, check_output_folder, read_points, staged_folder, write_cloud
+from ..io import (
+    MIN_SCAN_POINTS,
+    atomic_write_text,
+    check_output_folder,
+    read_points,
+    staged_folder,
+    write_cloud,
+    write_timings,
+)
 from . import app
 from ._clouds import FORMAT_HELP, cloud_format
 from ._common import check_up_option, load_config
@@ -59,7 +67,7 @@ def write_segmentation(seg: Segmentation, out: Path) -> tuple[Path, Path]:
     with staged_folder(out, "output folder") as stage:
         write_cloud(stage / "segments.ply", cloud)
         atomic_write_text(stage / "planes.json", json.dumps(doc, indent=1))
-        atomic_write_text(stage / "timings.json", json.dumps(timings, indent=2) + "\n")
+        write_timings(stage / "timings.json", timings)
     return out / "segments.ply", out / "planes.json"
 
 
@@ -92,7 +100,7 @@ def segment(
     cfg = load_config(config, set_)
     check_output_folder(out)  # before any work
     with reporting():
-        cloud = read_points(path, fmt)
+        cloud = read_points(path, fmt, min_points=MIN_SCAN_POINTS)
         seg = run_segment(cloud, cfg, seed=seed, up=up, scale=scale)
         ply, js = write_segmentation(seg, out)
     if state.quiet:

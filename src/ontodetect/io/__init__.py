@@ -43,12 +43,14 @@ from ._atomic import (
     make_folder,
     staged_folder,
 )
+from ._budget import MIN_SCAN_POINTS, check_enough_points
 from ._detections import (
     DETECTIONS_FORMAT,
     detections_schema,
     read_detections,
     validate_detections,
     write_detections,
+    write_timings,
 )
 from ._exports import (
     EXPORTERS,
@@ -68,6 +70,7 @@ __all__ = [
     "DETECTIONS_FORMAT",
     "EXPORTERS",
     "FORMATS",
+    "MIN_SCAN_POINTS",
     "READERS",
     "RUN_MARKER",
     "WRITERS",
@@ -98,6 +101,7 @@ __all__ = [
     "write_detections",
     "write_mesh",
     "write_scannet_instances",
+    "write_timings",
 ]
 
 
@@ -360,14 +364,33 @@ LABELS_WHEN_PRESENT = ("scannet-votenet", "sunrgbd-votenet")
 
 
 def read_points(
-    path: str | os.PathLike[str], format: str | None = None, **options: Any
+    path: str | os.PathLike[str],
+    format: str | None = None,
+    *,
+    min_points: int = 1,
+    **options: Any,
 ) -> PointCloud:
     """:func:`read_cloud`, but a scan of a VoteNet layout whose label files are missing (a
     ScanNet test scan, a SUN RGB-D frame without boxes) is read without its labels: what
     detection needs is the points (``detect``, ``segment``, ``info``, a batch, tiles).
 
     ``format`` is a reader's name or None (guessed from the path); ``options`` go to the
-    reader, as :func:`read_cloud`'s do.
+    reader, as :func:`read_cloud`'s do. A cloud with fewer than ``min_points`` points with
+    finite coordinates is refused with a :class:`~ontodetect.errors.ReadError` naming the
+    file (:data:`MIN_SCAN_POINTS` for detection and segmentation; an empty cloud always is).
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from ontodetect import point_cloud
+    >>> f = pathlib.Path(tempfile.mkdtemp()) / "a.ply"
+    >>> _ = write_cloud(f, point_cloud([[0, 0, 0], [1, 0, 0], [0, 1, 0]]))
+    >>> len(read_points(f))
+    3
+    >>> read_points(f, min_points=MIN_SCAN_POINTS)
+    Traceback (most recent call last):
+    ...
+    ontodetect.errors.ReadError: ...a.ply: holds only 3 points with finite coordinates; ...
     """
     layout = format
     if layout is None:
@@ -377,7 +400,9 @@ def read_points(
             layout = None
     if layout in LABELS_WHEN_PRESENT:
         options = {"labels": None, **options}
-    return read_cloud(path, format=format, **options)
+    cloud = read_cloud(path, format=format, **options)
+    check_enough_points(path, len(cloud), min_points)
+    return cloud
 
 
 def write_cloud(

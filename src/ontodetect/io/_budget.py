@@ -9,6 +9,8 @@ come from the memory available when the process starts (the pipeline holds sever
 of the cloud, about :data:`BYTES_PER_POINT` bytes a point all told) and are capped at
 :data:`POINT_CAP`; the environment variables ``ONTODETECT_MAX_POINTS`` and
 ``ONTODETECT_MAX_BYTES`` set them explicitly.
+
+At the other end, a scan to detect in must hold at least :data:`MIN_SCAN_POINTS` points.
 """
 
 from __future__ import annotations
@@ -19,14 +21,17 @@ import os
 import numpy as np
 from numpy.typing import NDArray
 
+from .._up import MIN_CELL_POINTS
 from ..errors import ReadError
 
 __all__ = [
     "BYTES_PER_POINT",
     "MAX_COORDINATE",
     "MAX_EXTENT",
+    "MIN_SCAN_POINTS",
     "POINT_CAP",
     "check_bytes",
+    "check_enough_points",
     "check_extent",
     "check_points",
     "max_bytes",
@@ -102,6 +107,27 @@ def check_bytes(path: os.PathLike[str] | str, size: int, what: str = "the file")
             path,
             f"{what} declares {size:,} bytes of data, more than the {limit:,} allowed "
             "(set ONTODETECT_MAX_BYTES to change the limit)",
+        )
+
+
+#: Fewest points with finite coordinates a scan must hold for detection and segmentation.
+#: The preparation finds the up direction, the floor and every plane from plane fits in
+#: the cells of a grid, and a cell's fit counts only with ``MIN_CELL_POINTS`` points
+#: (three fix a plane; the others tell a plane from noise): a scan with fewer can hold no
+#: plane, so no floor and no object, and its point spacing (hence the clustering radius)
+#: would rest on a handful of distances.
+MIN_SCAN_POINTS = MIN_CELL_POINTS
+
+
+def check_enough_points(
+    path: os.PathLike[str] | str, count: int, min_points: int = MIN_SCAN_POINTS
+) -> None:
+    """Refuse a scan of ``count`` points with finite coordinates, fewer than ``min_points``."""
+    if count < min_points:
+        raise ReadError(
+            path,
+            f"holds only {count} point{'s' if count != 1 else ''} with finite coordinates; "
+            f"at least {min_points} are needed to find planes (and so the floor and any object)",
         )
 
 

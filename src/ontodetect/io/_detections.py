@@ -27,6 +27,7 @@ __all__ = [
     "read_detections",
     "validate_detections",
     "write_detections",
+    "write_timings",
 ]
 
 #: Format tag of detections.json, the one definition (``pipeline.Result.to_dict`` uses it).
@@ -63,6 +64,25 @@ def write_detections(path: str | os.PathLike[str], document: dict[str, Any]) -> 
     for k, d in enumerate(doc["detections"]):
         text = text.replace(f'"@@points{k}@@"', json.dumps(d["point_indices"]), 1)
     return atomic_write_text(path, text + "\n")
+
+
+def write_timings(path: str | os.PathLike[str], timings: dict[str, Any]) -> Path:
+    """Write ``timings.json`` atomically: what differs from run to run (seconds per stage,
+    a tiled run's seconds, memory and worker per tile), kept out of detections.json and
+    planes.json so that those are byte-identical for the same input and seed.
+
+    Keys in the order given, two spaces of indentation, a final newline.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> f = write_timings(pathlib.Path(tempfile.mkdtemp()) / "timings.json", {"voxels": 0.5})
+    >>> print(f.read_text(), end="")
+    {
+      "voxels": 0.5
+    }
+    """
+    return atomic_write_text(path, json.dumps(timings, indent=2) + "\n")
 
 
 def _fail(source: str, where: str, problem: str) -> CorruptFileError:

@@ -20,8 +20,9 @@ row-major grid position (``row * WIDTH + column``) of every point kept. ``meta``
 records ``width``, ``height``, ``organized``, ``viewpoint`` and ``pcd_data``.
 
 The writer puts such a frame back on its grid (NaN where a pixel has no point), and
-stores coordinates as float32, as PCL does, unless that would move them by more
-than :data:`FLOAT32_TOLERANCE` (a cloud in map coordinates): then as float64.
+stores coordinates as float32, as PCL does, unless that would move them by more than
+:data:`~ontodetect.io._ply.FLOAT32_TOLERANCE` (a cloud in map coordinates): then as
+float64.
 """
 
 from __future__ import annotations
@@ -43,7 +44,6 @@ from ..errors import CorruptFileError, InvalidParameterError, ReadError, WriteEr
 from ._budget import check_bytes, check_points
 from ._ply import (
     HEADER_MAX_BYTES,
-    WRITE_CHUNK_ROWS,
     Column,
     ColumnPlan,
     ascii_table,
@@ -56,6 +56,7 @@ from ._ply import (
     file_size,
     parse_column,
     plan_columns,
+    storage_dtype,
     write_ascii_rows,
     write_atomically,
     write_rows,
@@ -72,12 +73,6 @@ LZF_MAX_BYTES = 2**32 - 1
 DEFAULT_VIEWPOINT = (0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0)
 #: Encodings of the points named on the ``DATA`` line.
 ENCODINGS = ("ascii", "binary", "binary_compressed")
-#: Largest change (in the cloud's units, metres as a rule) that storing coordinates and
-#: normals as float32 may make; beyond it the writer chooses float64. Far below any
-#: scan's noise, and above float32's rounding in a frame a few hundred metres across,
-#: so room-scale clouds keep PCL's float32 while map coordinates (UTM: float32 steps of
-#: 3 to 50 cm) keep every digit.
-FLOAT32_TOLERANCE = 1e-5
 
 _TYPES = {
     ("F", 4): "f4",
@@ -574,27 +569,12 @@ def _pack_rgb(rgb: NDArray[np.uint8]) -> NDArray[np.float32]:
     return packed.astype("<u4").view("<f4")
 
 
-def _float32_keeps(values: NDArray[np.float64]) -> bool:
-    """True when float32 stores every value within :data:`FLOAT32_TOLERANCE`.
-
-    NaN and infinities count as kept (float32 holds them); a value beyond the
-    float32 range becomes infinite, which does not.
-    """
-    for start in range(0, len(values), WRITE_CHUNK_ROWS):
-        block = values[start : start + WRITE_CHUNK_ROWS]
-        with np.errstate(over="ignore", invalid="ignore"):
-            moved = np.abs(block.astype(np.float32).astype(np.float64) - block)
-            if np.any(moved > FLOAT32_TOLERANCE):
-                return False
-    return True
-
-
 def _coordinate_type(path: Path, cloud: PointCloud, dtype: Any) -> np.dtype:
     """Little-endian type of coordinates and normals: ``dtype``, or when it is None,
-    float32 unless that loses more than :data:`FLOAT32_TOLERANCE`."""
+    float32 unless that loses more than :data:`~ontodetect.io._ply.FLOAT32_TOLERANCE`."""
     if dtype is None:
         arrays = [cloud.xyz] if cloud.normals is None else [cloud.xyz, cloud.normals]
-        dtype = np.float32 if all(_float32_keeps(a) for a in arrays) else np.float64
+        return storage_dtype(np.float32, *arrays)
     kind = coordinate_dtype(dtype).newbyteorder("<")
     if kind.itemsize == 4:
         check_float32_range(path, "xyz", cloud.xyz)
@@ -609,9 +589,10 @@ def _grid(cloud: PointCloud) -> tuple[int, int, NDArray[np.int64] | None]:
     A frame whose points each have a pixel of their own (:func:`pixel_grid`; a frame
     read from an organized PCD lost its NaN pixels) goes back on its grid. Else a
     ``meta`` grid that the points fill exactly is kept as it is; anything else (a
-    grid that no longer fits the points) is written unorganized.
+    grid that no longer fits the points, or a frame whose pixels are unknown:
+    :func:`_pixels_lost`) is written unorganized.
     """
-    grid = pixel_grid(cloud)
+    grid = None if _pixels_lost(cloud) else pixel_grid(cloud)
     if grid is not None:
         pixels, width, height = grid
         if np.bincount(pixels, minlength=width * height).max() == 1:
@@ -626,6 +607,27 @@ def _grid(cloud: PointCloud) -> tuple[int, int, NDArray[np.int64] | None]:
     ):
         return width, height, None
     return len(cloud), 1, None
+
+
+def _pixels_lost(cloud: PointCloud) -> bool:
+    """True when a frame's pixels would be read from an index that does not hold them.
+
+    An organized frame without a ``pixel`` field keeps each point's pixel in its index.
+    A cloud built again from part of a frame without its index
+    (``point_cloud(frame.xyz[keep], meta=frame.meta)``) numbers its points 0, 1, 2...:
+    those are not its pixels, and writing them as pixels would move its points. An index
+    0..n-1 over fewer points than the grid has pixels is taken as such a numbering; a
+    frame read from a file has it only when every pixel without depth is at the end of
+    the grid, and then it is written unorganized, with every point, all the same.
+    """
+    if "pixel" in cloud.fields or not cloud.is_complete:
+        return False
+    width, height = cloud.meta.get("width"), cloud.meta.get("height")
+    return not (
+        isinstance(width, (int, np.integer))
+        and isinstance(height, (int, np.integer))
+        and int(width) * int(height) == len(cloud)
+    )
 
 
 def _on_grid(values: NDArray[Any], pixels: NDArray[np.int64], size: int, fill: Any) -> NDArray[Any]:
@@ -679,14 +681,16 @@ def write_pcd(path: Path, cloud: PointCloud, *, data: str = "binary", dtype: Any
         each point on a pixel of its own) is written on its ``width`` x
         ``height`` grid in pixel order, with NaN coordinates and normals, zero
         colours and fields where a pixel has no point, and its ``viewpoint``;
-        so is a cloud whose ``meta`` grid (height > 1) matches its size.
+        so is a cloud whose ``meta`` grid (height > 1) matches its size. A frame
+        whose points no longer know their pixels (rebuilt without its ``index``
+        from part of a frame) is written unorganized, never on wrong pixels.
     data : {"binary", "ascii", "binary_compressed"}
         Encoding of the points.
     dtype : {"float32", "float64"}, optional
         Type of coordinates and normals. By default float32, as in PCL's point
         types, unless that would move a value by more than
-        :data:`FLOAT32_TOLERANCE` (coordinates far from the origin), in which
-        case float64, which keeps them exactly.
+        :data:`~ontodetect.io._ply.FLOAT32_TOLERANCE` (coordinates far from the
+        origin), in which case float64, which keeps them exactly.
 
     Returns
     -------

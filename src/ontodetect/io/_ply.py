@@ -54,6 +54,12 @@ QUOTE_CHARS = 24
 
 #: Largest finite float32, as a Python float (comparisons stay in float64).
 FLOAT32_MAX = float(np.finfo(np.float32).max)
+#: Largest change (in the cloud's units, metres as a rule) that storing coordinates and
+#: normals as float32 may make; beyond it the writers choose float64. Far below any
+#: scan's noise, and above float32's rounding in a frame a few hundred metres across,
+#: so room-scale clouds keep float32 while map coordinates (UTM: float32 steps of
+#: 3 to 50 cm) keep every digit.
+FLOAT32_TOLERANCE = 1e-5
 #: Suffix given to a property whose name the cloud reserves for itself.
 RENAMED_SUFFIX = "_field"
 
@@ -922,6 +928,40 @@ def coordinate_dtype(dtype: Any) -> np.dtype:
     return kind
 
 
+def float32_keeps(values: NDArray[np.float64]) -> bool:
+    """True when float32 stores every value within :data:`FLOAT32_TOLERANCE`.
+
+    NaN and infinities count as kept (float32 holds them); a value beyond the
+    float32 range becomes infinite, which does not.
+    """
+    for start in range(0, len(values), WRITE_CHUNK_ROWS):
+        block = values[start : start + WRITE_CHUNK_ROWS]
+        with np.errstate(over="ignore", invalid="ignore"):
+            moved = np.abs(block.astype(np.float32).astype(np.float64) - block)
+            if np.any(moved > FLOAT32_TOLERANCE):
+                return False
+    return True
+
+
+def storage_dtype(dtype: Any, *arrays: NDArray[np.float64]) -> np.dtype:
+    """Little-endian type that stores coordinate ``arrays`` as the ``dtype`` option asks:
+    float64 as float64; float32 as float32 when that moves no value by more than
+    :data:`FLOAT32_TOLERANCE`, else as float64 (map coordinates, which float32 would move
+    by centimetres, and values beyond its range).
+
+    Examples
+    --------
+    >>> storage_dtype("float32", np.array([1.5, 2.25])).str
+    '<f4'
+    >>> storage_dtype("float32", np.array([500000.123, 2.25])).str
+    '<f8'
+    """
+    kind = coordinate_dtype(dtype)
+    if kind.itemsize == 4 and not all(float32_keeps(a) for a in arrays):
+        kind = np.dtype(np.float64)
+    return kind.newbyteorder("<")
+
+
 def check_float32_range(path: Path, name: str, values: NDArray[Any]) -> None:
     """Refuse to write values that float32 cannot hold instead of writing infinities."""
     top = float(np.abs(values).max()) if values.size else 0.0
@@ -1079,7 +1119,9 @@ def write_ply(
     ascii : bool
         Write text instead of binary (for small files one wants to read).
     dtype : {"float64", "float32"}
-        Type of the coordinates and normals.
+        Type of the coordinates and normals. float32 is used only when it moves no
+        value by more than :data:`FLOAT32_TOLERANCE`; coordinates far from the origin
+        (map coordinates) are written as float64 all the same, which keeps them exactly.
     comments : sequence of str
         Header comment lines (one ``comment`` line each, after ``written by ontodetect``);
         a line may not hold a line break.
@@ -1106,11 +1148,8 @@ def write_ply(
     path = Path(path)
     if not isinstance(cloud, PointCloud):
         raise WriteError(path, f"expected a PointCloud, got {type(cloud).__name__}")
-    kind = coordinate_dtype(dtype).newbyteorder("<")
-    if kind.itemsize == 4:
-        check_float32_range(path, "xyz", cloud.xyz)
-        if cloud.normals is not None:
-            check_float32_range(path, "normals", cloud.normals)
+    arrays = [cloud.xyz] if cloud.normals is None else [cloud.xyz, cloud.normals]
+    kind = storage_dtype(dtype, *arrays)
     columns: list[Column] = [(c, kind, cloud.xyz[:, i]) for i, c in enumerate("xyz")]
     if cloud.rgb is not None:
         columns += [
@@ -1163,7 +1202,9 @@ def write_mesh_ply(
     colors : (v, 3) uint8, optional
         Vertex colours (``uchar red green blue``).
     dtype : {"float64", "float32"}
-        Type of the coordinates: float64 keeps millimetres in a frame far from its origin.
+        Type of the coordinates: float64 keeps millimetres in a frame far from its origin;
+        float32 is used only when it moves no vertex by more than
+        :data:`FLOAT32_TOLERANCE` (else float64).
     comments : sequence of str
         Header comment lines after ``written by ontodetect``.
 
@@ -1187,7 +1228,7 @@ def write_mesh_ply(
     (3, [[0, 1, 2]])
     """
     path = Path(path)
-    kind = coordinate_dtype(dtype).newbyteorder("<")
+    coordinate_dtype(dtype)  # a bad option is named before the arrays are looked at
     xyz = np.asarray(vertices, dtype=np.float64)
     tri = np.asarray(triangles)
     if xyz.ndim != 2 or xyz.shape[1] != 3:
@@ -1196,8 +1237,7 @@ def write_mesh_ply(
         raise WriteError(path, f"triangles of shape {tri.shape}, expected (t, 3) integers")
     if tri.size and (tri.min() < 0 or tri.max() >= len(xyz)):
         raise WriteError(path, f"triangles name vertices outside 0..{len(xyz) - 1}")
-    if kind.itemsize == 4:
-        check_float32_range(path, "vertices", xyz)
+    kind = storage_dtype(dtype, xyz)
     columns: list[Column] = [(c, kind, xyz[:, i]) for i, c in enumerate("xyz")]
     if colors is not None:
         rgb = np.asarray(colors)

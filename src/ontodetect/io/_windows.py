@@ -27,6 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..cloud import PointCloud, point_cloud
 from ..errors import CorruptFileError, InvalidParameterError, ReadError
+from ._budget import MIN_SCAN_POINTS, check_enough_points
 from ._las import MAX_COLOR8, _BoundedFile, _check_header, _laspy, _laspy_errors
 from ._ply import _plan_for, _read_header, file_size
 
@@ -316,11 +317,14 @@ def survey_cloud(
     format: str | None = None,
     sample_points: int = 2_000_000,
     chunk_points: int = WINDOW_CHUNK_POINTS,
+    min_points: int = MIN_SCAN_POINTS,
 ) -> CloudSurvey:
     """Count, bound and subsample a file in one pass, a chunk at a time.
 
     The subsample is every ``step``-th row, ``step`` the smallest that gives at most
     ``sample_points`` rows (the row count comes from the header, without a first pass).
+    A file with fewer than ``min_points`` points with finite coordinates is refused
+    (:class:`~ontodetect.errors.ReadError`): the survey is the start of a detection.
     """
     path = Path(path)
     if isinstance(sample_points, bool) or not isinstance(sample_points, int) or sample_points < 1:
@@ -332,10 +336,11 @@ def survey_cloud(
     parts: list[Chunk] = []
     rows: list[NDArray[np.int64]] = []
     boxes: list[NDArray[np.float64]] = []
-    n = 0
+    n = usable = 0
     for chunk in iter_chunks(path, format=format, chunk_points=chunk_points):
         m = len(chunk.xyz)
         finite = np.isfinite(chunk.xyz).all(axis=1)
+        usable += int(finite.sum())
         box = np.full((2, 3), np.nan)
         if finite.any():
             box = np.array([chunk.xyz[finite].min(axis=0), chunk.xyz[finite].max(axis=0)])
@@ -356,6 +361,7 @@ def survey_cloud(
         n = max(n, chunk.start + m)
     if not parts:
         raise CorruptFileError(path, "contains no points with finite coordinates")
+    check_enough_points(path, usable, min_points)
     sample = _cloud(path, parts, np.concatenate(rows))
     return CloudSurvey(n, lo, hi, sample, step, chunk_points, np.array(boxes).reshape(-1, 2, 3))
 
