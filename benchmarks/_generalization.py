@@ -508,6 +508,7 @@ def missed_causes(
     clusters: Sequence[Instance],
     *,
     iou_threshold: float = 0.25,
+    lacks: Sequence[Mapping[str, str]] = (),
 ) -> list[dict[str, Any]]:
     """Where each missed ground-truth object was lost: segmentation, scoring or the vote.
 
@@ -529,13 +530,18 @@ def missed_causes(
     clusters : sequence of Instance
         The first pass's clusters (rows of the scan), each with the label the first pass
         gave it ("" for none): :attr:`ontodetect.evaluation.SceneOutcome.clusters`.
+    lacks : sequence of mapping, optional
+        Per cluster, what its reading as each label lacked most
+        (:attr:`ontodetect.evaluation.SceneOutcome.cluster_lacks`).
 
     Returns
     -------
     list of dict
         Per missed object, in the order of ``gts``: ``id``, ``label``, ``cause``, ``iou``
-        and ``cover`` (share of the object in the cluster) of the best cluster, and the
-        cluster's ``as`` (its first-pass label, "" for none).
+        and ``cover`` (share of the object in the cluster) of the best cluster, the
+        cluster's ``as`` (its first-pass label, "" for none) and, for an object lost to
+        the scoring, ``lacks``: the factor that weighed most against reading the cluster
+        as the object's class ("" otherwise, or without ``lacks``).
 
     Examples
     --------
@@ -545,6 +551,9 @@ def missed_causes(
     ...             Instance.make(2, "chair", range(60, 70))]
     >>> [(m["id"], m["cause"], m["as"]) for m in missed_causes([], gts, clusters)]
     [(1, 'vote', 'chair'), (2, 'merged', ''), (3, 'scored', 'chair')]
+    >>> lacks = [{}, {}, {"table": "top.open_below"}]
+    >>> [m["lacks"] for m in missed_causes([], gts, clusters, lacks=lacks)]
+    ['', '', 'top.open_below']
     """
     gts = list(gts)
     m = match_instances(list(preds), gts, iou_threshold=iou_threshold)
@@ -556,7 +565,7 @@ def missed_causes(
     for i, g in enumerate(missed):
         if not len(clusters) or inter[i].max() == 0:
             out.append({"id": g.id, "label": g.label, "cause": "not clustered",
-                        "iou": 0.0, "cover": 0.0, "as": ""})  # fmt: skip
+                        "iou": 0.0, "cover": 0.0, "as": "", "lacks": ""})  # fmt: skip
             continue
         j = int(np.argmax(inter[i]))
         cover = float(inter[i, j]) / len(g.points)
@@ -572,6 +581,7 @@ def missed_causes(
                 "iou": round(float(iou[i, j]), 4),
                 "cover": round(cover, 4),
                 "as": clusters[j].label,
+                "lacks": lacks[j].get(g.label, "") if cause == "scored" and lacks else "",
             }
         )
     return out

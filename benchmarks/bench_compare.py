@@ -202,7 +202,13 @@ def false_rows(
 
 def missed_rows(before: Mapping[str, Any], after: Mapping[str, Any]) -> list[tuple[str, int, int]]:
     """Per class, the objects missed before and after: the total, then each cause (where
-    the object was lost: ``missed_causes`` of the benchmark), in the benchmark's order."""
+    the object was lost: ``missed_causes`` of the benchmark), in the benchmark's order,
+    then the scored ones by what their class's reading lacked most, the commonest first.
+
+    >>> b = {"chair": {"total": 2, "causes": {"scored": 2}, "lacks": {"seat.missing": 2}}}
+    >>> missed_rows(b, {"chair": {"total": 1, "causes": {"scored": 1}}})[-1]
+    ('chair, scored, lacking seat.missing', 2, 0)
+    """
     rows = []
     for c in _ordered(list(before) + list(after)):
         b, a = before.get(c, {}), after.get(c, {})
@@ -211,6 +217,9 @@ def missed_rows(before: Mapping[str, Any], after: Mapping[str, Any]) -> list[tup
         known = [k for k in MISSED_CAUSES if k in cb or k in ca]
         for k in known + _ordered(k for k in (*cb, *ca) if k not in MISSED_CAUSES):
             rows.append((f"{c}, {k}", int(cb.get(k, 0)), int(ca.get(k, 0))))
+        lb, la = b.get("lacks", {}), a.get("lacks", {})
+        for k in sorted({*lb, *la}, key=lambda k: (-max(lb.get(k, 0), la.get(k, 0)), k)):
+            rows.append((f"{c}, scored, lacking {k}", int(lb.get(k, 0)), int(la.get(k, 0))))
     return rows
 
 

@@ -87,6 +87,7 @@ from ontodetect.evaluation import (
     evaluate_scenes,
     evaluation_classes,
     first_pass_clusters,
+    first_pass_lacks,
     instances_from_labels,
     load_scene,
     map_scenes,
@@ -439,14 +440,20 @@ def scene_mistakes(
     clusters: Sequence[Instance],
     labels: tuple[np.ndarray, Mapping[int, tuple[str, str]]],
     iou_threshold: float,
+    lacks: Sequence[Mapping[str, str]] = (),
 ) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
     """One scan's false detections (:func:`false_detection_causes`) and missed objects
     (:func:`missed_causes`, with their kind; none without the first pass's clusters),
-    each with the scan's name; ``labels`` is :func:`scene_labels` of the scan."""
+    each with the scan's name; ``labels`` is :func:`scene_labels` of the scan, ``lacks``
+    the clusters' :attr:`~ontodetect.evaluation.SceneOutcome.cluster_lacks`."""
     rows, what = labels
     kinds = {iid: kind for iid, (_, kind) in what.items()}
     false = false_detection_causes(preds, gts, rows, what, iou_threshold=iou_threshold)
-    missed = missed_causes(preds, gts, clusters, iou_threshold=iou_threshold) if clusters else []
+    missed = (
+        missed_causes(preds, gts, clusters, iou_threshold=iou_threshold, lacks=lacks)
+        if clusters
+        else []
+    )
     return (
         [{"scene": name, **f} for f in false],
         [{"scene": name, "kind": kinds.get(m["id"], m["label"]), **m} for m in missed],
@@ -473,7 +480,9 @@ def mistakes_and_families(
         for g in o.gts:
             family_class.setdefault(kinds.get(g.id, g.label), g.label)
         for key, thr in THRESHOLDS.items():
-            f, m = scene_mistakes(o.name, o.preds, o.gts, o.clusters, (rows, what), thr)
+            f, m = scene_mistakes(
+                o.name, o.preds, o.gts, o.clusters, (rows, what), thr, o.cluster_lacks
+            )
             false[key] += f
             missed[key] += m
             for fam, (found, total) in recall_by_group(
@@ -488,7 +497,7 @@ def mistakes_and_families(
 #: What a false detection and a missed object are written with in ``mistakes``: the scan and
 #: what names the object across runs (the labelled instance, the ground-truth id), and why.
 FALSE_FIELDS = ("scene", "label", "is", "kind", "instance", "share")
-MISSED_FIELDS = ("scene", "id", "label", "kind", "cause", "iou", "as")
+MISSED_FIELDS = ("scene", "id", "label", "kind", "cause", "iou", "as", "lacks")
 
 
 def mistake_items(
@@ -515,20 +524,26 @@ def mistake_items(
 
 def missed_summary(missed: Mapping[str, list[dict[str, Any]]]) -> dict[str, dict[str, Any]]:
     """Threshold -> class -> how many objects were missed, by cause
-    (:func:`benchmarks._generalization.missed_causes`), and by kind and cause."""
+    (:func:`benchmarks._generalization.missed_causes`), by kind and cause, and, of those
+    lost to the scoring, by what their class's reading lacked most (``lacks``)."""
     out: dict[str, dict[str, Any]] = {k: {} for k in missed}
     for key, items in missed.items():
         for m in items:
-            row = out[key].setdefault(m["label"], {"total": 0, "causes": Counter(), "kinds": {}})
+            row = out[key].setdefault(
+                m["label"], {"total": 0, "causes": Counter(), "kinds": {}, "lacks": Counter()}
+            )
             row["total"] += 1
             row["causes"][m["cause"]] += 1
             row["kinds"].setdefault(m["kind"], Counter())[m["cause"]] += 1
+            if m.get("lacks"):
+                row["lacks"][m["lacks"]] += 1
     return {
         key: {
             c: {
                 "total": v["total"],
                 "causes": {k: v["causes"][k] for k in MISSED_CAUSES if v["causes"][k]},
                 "kinds": {k: dict(n) for k, n in sorted(v["kinds"].items())},
+                "lacks": dict(sorted(v["lacks"].items(), key=lambda kv: (-kv[1], kv[0]))),
             }
             for c, v in sorted(rows.items())
         }
@@ -553,6 +568,32 @@ def missed_table(title: str, summary: Mapping[str, Any]) -> Table:
             str(a["total"]),
             *[str(a["causes"].get(k, 0)) for k in MISSED_CAUSES],
             str(b["total"]),
+        )
+    return t
+
+
+#: How many of the factors that most often sank a scored miss :func:`lacks_table` lists.
+LACKS_SHOWN = 6
+
+
+def lacks_table(title: str, summary: Mapping[str, Any]) -> Table:
+    """Of the objects lost to the scoring (a cluster holds them, the first pass read it
+    otherwise), what their class's reading lacked most, per class (:func:`missed_summary`):
+    the ``part.feature`` whose factor was smallest, the commonest first."""
+    t = Table(title=title, title_justify="left")
+    t.add_column("class")
+    t.add_column("scored", justify="right")
+    t.add_column("what the reading as the class lacked most (objects)")
+    lo = summary["iou@0.25"]
+    for c in CLASSES:
+        row = lo.get(c, {})
+        lacks = row.get("lacks", {})
+        shown = ", ".join(f"{k} {n}" for k, n in list(lacks.items())[:LACKS_SHOWN])
+        rest = sum(list(lacks.values())[LACKS_SHOWN:])
+        t.add_row(
+            c,
+            str(row.get("causes", {}).get("scored", 0)),
+            shown + (f", other {rest}" if rest else ""),
         )
     return t
 
@@ -976,7 +1017,9 @@ def robustness_unit(
     matched = match_instances(preds, gts, iou_threshold=thr).pred_match
     clusters = first_pass_clusters(result)
     labels = scene_labels(source, cloud)  # the changed copy: its rows, a doubled point's too
-    false, missed = scene_mistakes(source.name, preds, gts, clusters, labels, thr)
+    false, missed = scene_mistakes(
+        source.name, preds, gts, clusters, labels, thr, first_pass_lacks(result)
+    )
     counts = {
         c: [
             sum(1 for p, m in zip(preds, matched) if p.label == c and m >= 0),
@@ -1458,6 +1501,7 @@ def print_simulated(
         false_table(f"{title}: what the false detections are", figures["false_detections"])
     )
     console.print(missed_table(f"{title}: where the missed objects were lost", figures["missed"]))
+    console.print(lacks_table(f"{title}: what the scored misses lacked", figures["missed"]))
 
 
 def _named_scans(
@@ -1545,6 +1589,7 @@ def _run_real(
         false_table("Real: what the false detections are", doc["real"]["false_detections"])
     )
     console.print(missed_table("Real: where the missed objects were lost", doc["real"]["missed"]))
+    console.print(lacks_table("Real: what the scored misses lacked", doc["real"]["missed"]))
     return real
 
 

@@ -459,7 +459,9 @@ def test_the_benchmark_lists_every_mistake_with_what_names_it_across_runs():
     f = {"scene": "s", "id": 3, "label": "chair", "is": "toilet", "kind": "toilet"}
     m = {"scene": "s", "id": 4, "label": "chair", "kind": "chair-dining", "cause": "scored"}
     false = {"iou@0.25": [{**f, "instance": 7, "share": 0.9}]}
-    missed = {"iou@0.25": [{**m, "iou": 0.61, "cover": 0.9, "as": "table"}]}
+    missed = {
+        "iou@0.25": [{**m, "iou": 0.61, "cover": 0.9, "as": "table", "lacks": "seat.missing"}]
+    }
     items = B.mistake_items(false, missed)
     assert list(items) == ["iou@0.25"]
     # the detection's id changes from run to run: the labelled instance names the object
@@ -475,7 +477,7 @@ def test_the_benchmark_lists_every_mistake_with_what_names_it_across_runs():
     ]
     assert items["iou@0.25"]["missed"] == [
         {"scene": "s", "id": 4, "label": "chair", "kind": "chair-dining", "cause": "scored",
-         "iou": 0.61, "as": "table"}
+         "iou": 0.61, "as": "table", "lacks": "seat.missing"}
     ]  # fmt: skip
 
 

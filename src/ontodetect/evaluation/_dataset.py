@@ -77,6 +77,7 @@ __all__ = [
     "evaluate_scene",
     "evaluation_classes",
     "first_pass_clusters",
+    "first_pass_lacks",
     "load_scene",
     "map_scenes",
     "read_scene_detections",
@@ -340,6 +341,9 @@ class SceneOutcome:
         The first pass's clusters (rows of the input file), each with the label that pass
         gave it ("" for none), to tell where a missed object went (empty for stored
         detections).
+    cluster_lacks : tuple of dict
+        Per cluster of ``clusters``, what its reading as each label lacked most
+        (:func:`first_pass_lacks`).
     """
 
     name: str
@@ -356,6 +360,7 @@ class SceneOutcome:
     pred_boxes: tuple[BoxInstance, ...] = ()
     gt_boxes: tuple[BoxInstance, ...] = ()
     clusters: tuple[Instance, ...] = ()
+    cluster_lacks: tuple[dict[str, str], ...] = ()
 
     @property
     def ok(self) -> bool:
@@ -453,6 +458,7 @@ def evaluate_scene(
     try:
         scene = load_scene(source, class_ids, turn=turn)
         clusters: list[Instance] = []
+        lacks: list[dict[str, str]] = []
         if detections_dir is not None:
             preds, pred_boxes = read_scene_detections(
                 detections_dir, source.name, scene.num_points, boxes=True
@@ -474,6 +480,7 @@ def evaluate_scene(
                 for d in result.detections
             ]
             clusters = first_pass_clusters(result)
+            lacks = first_pass_lacks(result)
             if save_dir is not None:
                 _save_detections(result, Path(save_dir) / name)
     except OntoDetectError as exc:
@@ -490,6 +497,7 @@ def evaluate_scene(
         pred_boxes=tuple(pred_boxes),
         gt_boxes=tuple(scene.gt_boxes),
         clusters=tuple(clusters),
+        cluster_lacks=tuple(lacks),
     )
 
 
@@ -504,6 +512,32 @@ def first_pass_clusters(result: Any) -> list[Instance]:
         label = onto[name].label if name is not None and name in onto else ""
         out.append(Instance.make(k, label, index[c.point_indices]))
     return out
+
+
+def first_pass_lacks(result: Any) -> list[dict[str, str]]:
+    """Per cluster of the first pass, per label: the factor that weighed most against the
+    cluster's best reading as that label, as ``part.feature`` (``seat.missing``: no plane
+    could be its seat; ``cluster.breadth``, ``backrest~seat.distance``...). Of the classes
+    with one label (a chair and an easy chair) the likelier reading speaks. It tells a
+    missed object's cluster that holds it from a reading that fails on one measure."""
+    onto = result.ontology
+    out = []
+    for scores in result.scores:
+        best: dict[str, Any] = {}
+        for name, s in scores.classes.items():
+            label = onto[name].label if name in onto else name
+            if label not in best or s.log_likelihood > best[label].log_likelihood:
+                best[label] = s
+        out.append({label: _weakest(s) for label, s in sorted(best.items())})
+    return out
+
+
+def _weakest(score: Any) -> str:
+    """``part.feature`` of the smallest factor of a class reading ("" when it has none)."""
+    if not score.constraints:
+        return ""
+    c = min(score.constraints, key=lambda c: c.factor)
+    return f"{c.part}.{c.feature}"
 
 
 def variant_name(scene: str, turn: float | None = None, seed: int | None = None) -> str:
