@@ -13,22 +13,11 @@ from ontodetect.cli import main
 from ontodetect.io import MIN_SCAN_POINTS, read_points, write_timings
 from ontodetect.io._pcd import read_pcd, write_pcd
 from ontodetect.io._ply import FLOAT32_TOLERANCE, read_ply, write_mesh_ply, write_ply
+from test_reliability import one_line as _one_line
 
 
 def _header(path) -> str:
     return path.read_bytes().split(b"end_header\n")[0].decode("ascii", "replace")
-
-
-def _one_line(capsys, status: int, *must: str) -> str:
-    """Exit status 2 and exactly one line on stderr holding ``must``."""
-    err = capsys.readouterr().err
-    lines = [line for line in err.splitlines() if line.strip()]
-    assert status == 2, err
-    assert len(lines) == 1, err
-    assert "Traceback" not in err
-    for text in must:
-        assert text in lines[0], lines[0]
-    return lines[0]
 
 
 # ---------------------------------------------------------------------------------
