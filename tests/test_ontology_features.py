@@ -46,7 +46,7 @@ def test_every_scope_lists_its_features():
 def test_sigma_floors_are_those_calibration_used():
     """The absolute floors calibration kept beside it (evaluation._calibrate.ABS_SIGMA_FLOOR
     on 2026-11-24) are the registry's, with those of the features added since (``wall_gap``:
-    the voxel's 2 cm), and only these features have one."""
+    the voxel's 2 cm; ``span``: a share, as ``fill``), and only these features have one."""
     floors = {
         "tilt": 1.0,
         "angle": 2.0,
@@ -70,6 +70,7 @@ def test_sigma_floors_are_those_calibration_used():
         "over": 0.02,
         "aside": 0.02,
         "across": 1.0,
+        "span": 0.03,
         "overlap": 0.03,
         "rise": 0.02,
         "planes": 0.5,
@@ -213,6 +214,49 @@ def test_a_cabinet_s_front_runs_along_its_top_not_across_its_end():
     desk = score_class(cabinet, cluster([top, end], touching, length=1.2, breadth=0.6))
     assert sideboard.assignment == {"top": 0, "front": 1}
     assert desk.likelihood < 0.2 * sideboard.likelihood
+
+
+#: A 1.2 x 0.6 m desk or sideboard top at 0.74 m, a front spanning it, and a drawer
+#: pedestal's front along it, 0.42 m wide and taller than wide.
+DESK_TOP = Axed(1.0, 0.74, 1.2, 0.6)
+SIDEBOARD_FRONT = Axed(89.0, 0.37, 1.2, 0.72, cy=0.3, normal=(0.0, 1.0, 0.0),
+                       axes=((1.0, 0.0, 0.0), (0.0, 0.0, 1.0)))  # fmt: skip
+PEDESTAL_FRONT = Axed(89.0, 0.37, 0.72, 0.42, cx=0.39, cy=0.3, normal=(0.0, 1.0, 0.0),
+                      axes=((0.0, 0.0, 1.0), (1.0, 0.0, 0.0)))  # fmt: skip
+
+
+def test_span_is_the_share_of_a_top_a_front_spans_along_its_run():
+    """A sideboard's front spans its top (1); a desk's drawer pedestal, 0.42 m of a 1.2 m
+    top along it, a third; a turned top is measured along the front's run; two level or two
+    upright planes, or planes without axes, are not measured."""
+    top, front, pedestal = DESK_TOP, SIDEBOARD_FRONT, PEDESTAL_FRONT
+    span = FEATURES["relation"]["span"].relation
+    assert span(cluster([top, front], length=1.2), 0, 1) == pytest.approx(1.0)
+    assert span(cluster([top, front], length=1.2), 1, 0) == pytest.approx(1.0)
+    assert span(cluster([top, pedestal], length=1.2), 0, 1) == pytest.approx(0.35)
+    # a top turned by 90 degrees shows its 0.6 m depth along the front's run
+    turned = Axed(1.0, 0.74, 1.2, 0.6, axes=((0.0, 1.0, 0.0), (-1.0, 0.0, 0.0)))
+    assert span(cluster([turned, front], length=1.2), 0, 1) == pytest.approx(2.0)
+    assert math.isnan(span(cluster([top, Axed(2.0, 0.4, 1.0, 0.5)], length=1.2), 0, 1))
+    assert math.isnan(span(cluster([front, pedestal], length=1.2), 0, 1))
+    assert math.isnan(span(cluster([P(0.0, 0.74, 1.2, 0.6), front], length=1.2), 0, 1))
+
+
+def test_a_desk_on_a_drawer_pedestal_is_no_cabinet():
+    """The built-in cabinet's front spans its top (catalogue carcasses); a pedestal's
+    front along a desk's top, a third of it, costs the cabinet reading, and the table's
+    reading of the desk wins."""
+    onto = builtin_ontology()
+    cabinet = onto["cabinet"]
+    touching = {(0, 1): R(angle=88.0, distance=0.01)}
+    sideboard = score_class(
+        cabinet, cluster([DESK_TOP, SIDEBOARD_FRONT], touching, length=1.2, breadth=0.6)
+    )
+    desk_cluster = cluster([DESK_TOP, PEDESTAL_FRONT], touching, length=1.2, breadth=0.6)
+    desk = score_class(cabinet, desk_cluster)
+    assert sideboard.assignment == {"top": 0, "front": 1}
+    assert desk.likelihood < 0.4 * sideboard.likelihood
+    assert score_class(onto["table"], desk_cluster).likelihood > desk.likelihood
 
 
 def test_a_chair_s_back_rises_above_its_arms():

@@ -258,6 +258,36 @@ def _across(desc: Any, i: int, j: int) -> float:
     return math.degrees(math.acos(min(1.0, cos)))
 
 
+def _span(desc: Any, i: int, j: int) -> float:
+    """How much of the level plane's extent the upright one spans, along the upright one's
+    horizontal run: the run's extent of each (a plane's rectangle, ``length`` along
+    ``axes[0]`` and ``width`` along ``axes[1]``, projected on the run), the upright's over
+    the level's. About 1 for a cabinet's front under its top; a third for a desk's drawer
+    pedestal under a desk's top. NaN (not measured) unless one is level and the other
+    upright, or when a plane comes without its axes."""
+    a, b = desc.planes[i], desc.planes[j]
+    if float(a.tilt) > float(b.tilt):
+        a, b = b, a
+    if float(a.tilt) > 45.0 or float(b.tilt) < 45.0:
+        return math.nan
+    if getattr(a, "axes", None) is None or getattr(b, "axes", None) is None:
+        return math.nan
+    normal = np.asarray(b.normal, dtype=float)[:2]
+    size = float(np.hypot(*normal))
+    if size < 1e-9:
+        return math.nan
+    run = np.array([-normal[1], normal[0], 0.0]) / size
+
+    def extent(plane: Any) -> float:
+        axes = np.asarray(plane.axes, dtype=float)
+        return float(plane.length) * abs(float(axes[0] @ run)) + float(plane.width) * abs(
+            float(axes[1] @ run)
+        )
+
+    level = extent(a)
+    return math.nan if level <= 0.0 else extent(b) / level
+
+
 def _rise_above(desc: Any, i: int) -> float:
     """Height of the cluster above the highest inlier of plane ``i`` (m, at least 0)."""
     return max(0.0, float(desc.height) - float(desc.planes[i].z_max))
@@ -381,6 +411,11 @@ for _feature in (
             "one (degrees, 0..90): 0 for a sofa's back along its seat; not measured on a "
             "level plane less than 1.25 times longer than wide", 1.0,
             relation=_across),
+    Feature("span", "relation", "Pr",
+            "share of the level plane's extent the upright one spans along its horizontal "
+            "run: about 1 for a cabinet's front under its top, a third for a desk's drawer "
+            "pedestal; not measured unless one is level and the other upright", 0.03,
+            relation=_span),
     Feature("aside", "relation", "Pr",
             "horizontal distance between the centroids along the upright plane of the two, "
             "across its normal (m): 0 for a backrest centred on its seat", 0.02,
