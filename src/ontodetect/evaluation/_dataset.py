@@ -516,10 +516,12 @@ def first_pass_clusters(result: Any) -> list[Instance]:
 
 def first_pass_lacks(result: Any) -> list[dict[str, str]]:
     """Per cluster of the first pass, per label: the factor that weighed most against the
-    cluster's best reading as that label, as ``part.feature`` (``seat.missing``: no plane
-    could be its seat; ``cluster.breadth``, ``backrest~seat.distance``...). Of the classes
-    with one label (a chair and an easy chair) the likelier reading speaks. It tells a
-    missed object's cluster that holds it from a reading that fails on one measure."""
+    cluster's best reading as that label, as ``part.feature``: ``seat.missing`` when the
+    seat was left without a plane (none was fitted, or every plane that could be the seat
+    did worse than the part's ``missing`` factor), else the measure that cost most
+    (``cluster.breadth``, ``backrest~seat.distance``...). Of the classes with one label (a
+    chair and an easy chair) the likelier reading speaks. The benchmark uses it to say why
+    an object whose cluster holds it was read as something else."""
     onto = result.ontology
     out = []
     for scores in result.scores:
