@@ -236,16 +236,26 @@ def _aside(desc: Any, i: int, j: int) -> float:
 _LONG = 1.25
 
 
+def _level_upright(desc: Any, i: int, j: int) -> tuple[Any, Any] | None:
+    """Planes ``i`` and ``j`` as (the level one, the upright one), whichever comes first;
+    None unless one leans less than 45 degrees from level and the other more."""
+    a, b = desc.planes[i], desc.planes[j]
+    if float(a.tilt) > float(b.tilt):
+        a, b = b, a
+    if float(a.tilt) > 45.0 or float(b.tilt) < 45.0:
+        return None
+    return a, b
+
+
 def _across(desc: Any, i: int, j: int) -> float:
     """Angle (degrees, 0..90) between the long axis of the level plane of the two and the
     horizontal run of the upright one: 0 for a sofa's back along its seat, 90 for a bed's
     headboard across the end of its mattress; 0 unless one is level and the other upright,
     NaN (not measured) when the level one has no long axis or comes without its axes."""
-    a, b = desc.planes[i], desc.planes[j]
-    if float(a.tilt) > float(b.tilt):
-        a, b = b, a
-    if float(a.tilt) > 45.0 or float(b.tilt) < 45.0:
+    pair = _level_upright(desc, i, j)
+    if pair is None:
         return 0.0
+    a, b = pair
     axes = getattr(a, "axes", None)
     if axes is None or float(a.length) < _LONG * float(a.width):
         return math.nan  # no long axis to speak of (one cushion of a sofa), or none given
@@ -265,11 +275,10 @@ def _span(desc: Any, i: int, j: int) -> float:
     the level's. About 1 for a cabinet's front under its top; a third for a desk's drawer
     pedestal under a desk's top. NaN (not measured) unless one is level and the other
     upright, or when a plane comes without its axes."""
-    a, b = desc.planes[i], desc.planes[j]
-    if float(a.tilt) > float(b.tilt):
-        a, b = b, a
-    if float(a.tilt) > 45.0 or float(b.tilt) < 45.0:
+    pair = _level_upright(desc, i, j)
+    if pair is None:
         return math.nan
+    a, b = pair
     if getattr(a, "axes", None) is None or getattr(b, "axes", None) is None:
         return math.nan
     normal = np.asarray(b.normal, dtype=float)[:2]
