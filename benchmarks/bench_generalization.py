@@ -211,34 +211,45 @@ class SimScan:
         return f"{self.room}-s{self.seed}-{self.variant}"
 
 
-def simulated_set(room_types: Sequence[str], *, quick: bool = False) -> list[SimScan]:
+def simulated_set(
+    room_types: Sequence[str], *, quick: bool = False, first_seed: int = 0
+) -> list[SimScan]:
     """The fixed list of simulated scans: every room fused, some rooms also with variants.
 
     Full: ``max(7, ceil(60 / types))`` seeds of every type, fused; seed 0 of every type also
     with a second floor layer, seed 1 with holes, seed 2 tilted and seed 3 as a single
-    frame. Quick: seed 0 of up to four types, fused, and one type per extra variant.
+    frame. Quick: seed 0 of up to four types, fused, and one type per extra variant. Every
+    seed counts from ``first_seed`` (``--sim-seeds``): other rooms of the same kinds.
+
+    Examples
+    --------
+    >>> [s.name for s in simulated_set(["office"], first_seed=7)][:2]
+    ['office-s7-fused', 'office-s8-fused']
     """
     types = list(room_types)
     if quick:
         types = types[:4]
-        scans = [SimScan(r, 0, "fused") for r in types]
+        scans = [SimScan(r, first_seed, "fused") for r in types]
         for k, variant in enumerate(VARIANT_SEED):
-            scans.append(SimScan(types[k % len(types)], 0, variant))
+            scans.append(SimScan(types[k % len(types)], first_seed, variant))
         return scans
     seeds = max(MIN_SEEDS, math.ceil(MIN_ROOMS / len(types)))
-    scans = [SimScan(r, s, "fused") for r in types for s in range(seeds)]
+    scans = [SimScan(r, first_seed + s, "fused") for r in types for s in range(seeds)]
     for variant, seed in VARIANT_SEED.items():
-        scans += [SimScan(r, seed, variant) for r in types]
+        scans += [SimScan(r, first_seed + seed, variant) for r in types]
     return scans
 
 
-def frames_set(room_types: Sequence[str], *, quick: bool = False) -> list[SimScan]:
-    """The fixed list of single frames of (e): seeds 0 to ``FRAME_SEEDS - 1`` of every room
-    type, one RGB-D frame each (quick: seed 0 of two types)."""
+def frames_set(
+    room_types: Sequence[str], *, quick: bool = False, first_seed: int = 0
+) -> list[SimScan]:
+    """The fixed list of single frames of (e): seeds ``first_seed`` to ``first_seed +
+    FRAME_SEEDS - 1`` of every room type, one RGB-D frame each (quick: the first seed of two
+    types)."""
     types = list(room_types)
     if quick:
-        return [SimScan(r, 0, "frame") for r in types[:2]]
-    return [SimScan(r, s, "frame") for r in types for s in range(FRAME_SEEDS)]
+        return [SimScan(r, first_seed, "frame") for r in types[:2]]
+    return [SimScan(r, first_seed + s, "frame") for r in types for s in range(FRAME_SEEDS)]
 
 
 def _source_digest() -> str:
@@ -1151,6 +1162,14 @@ def main(argv: list[str] | None = None) -> int:
         "they are even if the generator changed",
     )
     ap.add_argument(
+        "--sim-seeds",
+        type=int,
+        default=0,
+        metavar="FIRST",
+        help="the simulated rooms and frames count their seeds from FIRST (default 0): with 7, "
+        "rooms of the same kinds that the pinned set (seeds 0-6) never showed",
+    )
+    ap.add_argument(
         "--only",
         default=",".join(PARTS),
         help="which measurements to run, of " + ", ".join(PARTS) + " (default: all six; "
@@ -1182,6 +1201,8 @@ def main(argv: list[str] | None = None) -> int:
         + ", ".join(f"{t:g}" for t in STABILITY_TURNS),
     )
     args = ap.parse_args(argv)
+    if args.sim_seeds < 0:
+        ap.error(f"--sim-seeds takes a seed of 0 or more, got {args.sim_seeds}")
     if args.turns is not None:
         try:
             args.turns = tuple(float(t) for t in args.turns.split(",") if t.strip())
@@ -1305,6 +1326,7 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
         "ontology": _ontology_record(args.ontologies, args.ontology_only),
         "room": args.room,
         "scene_source": dataclasses.asdict(source),
+        "sim_seeds": args.sim_seeds,
     }
     console.print(
         f"simulated rooms: [bold]{source.name}[/], {len(source.room_types)} room types"
@@ -1331,7 +1353,7 @@ def run(args: argparse.Namespace, real_scenes: list[SceneSource]) -> int:
         if not {"sim", "sparse"} & args.only:
             return _finish(out, doc, start)
         t0 = time.perf_counter()
-        scans = simulated_set(source.room_types, quick=args.quick)
+        scans = simulated_set(source.room_types, quick=args.quick, first_seed=args.sim_seeds)
         if args.sim_set is not None:
             folder, sim_sources = pinned_simulated_set(args.sim_set, scans)
             reused = True
@@ -1447,7 +1469,7 @@ def _run_frames(
 ) -> None:
     """(e): single frames of the simulated rooms, printed and put in ``doc["frames"]``."""
     t0 = time.perf_counter()
-    scans = frames_set(source.room_types, quick=args.quick)
+    scans = frames_set(source.room_types, quick=args.quick, first_seed=args.sim_seeds)
     if args.frames_set is not None:
         folder, sources = pinned_simulated_set(args.frames_set, scans, option="--frames-set")
         reused = True
@@ -1510,7 +1532,7 @@ def _named_scans(
     """``--stability-scans``: real scans of ``--real`` and simulated scans of the set."""
     names = [n.strip() for n in args.stability_scans.split(",") if n.strip()]
     real = {s.name: s for s in real_scenes}
-    scans = simulated_set(source.room_types)
+    scans = simulated_set(source.room_types, first_seed=args.sim_seeds)
     folder = args.sim_set or args.out
     if args.sim_set is None:
         # --out may hold the single frames' set beside the simulated set: the one that has

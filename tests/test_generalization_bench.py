@@ -380,6 +380,29 @@ def test_simulated_set_is_fixed_and_large_enough():
     assert len(quick) == 8 and {s.variant for s in quick} == set(B.VARIANTS)
 
 
+def test_a_second_simulated_set_shows_other_rooms_of_the_same_kinds():
+    types = [f"type{k}" for k in range(9)]
+    first, second = B.simulated_set(types), B.simulated_set(types, first_seed=7)
+    assert len(second) == len(first) and not {s.name for s in first} & {s.name for s in second}
+    assert {s.seed for s in second} == set(range(7, 14))
+    # the same variants, each on the same room of the set as in the first one
+    assert [(s.room, s.seed - 7, s.variant) for s in second] == [
+        (s.room, s.seed, s.variant) for s in first
+    ]
+    frames = B.frames_set(types, first_seed=7)
+    assert {s.seed for s in frames} == set(range(7, 14)) and len(frames) == 63
+    assert B.cache_key(B.RoomSource("parametric", ("a",), ""), first) != B.cache_key(
+        B.RoomSource("parametric", ("a",), ""), second
+    )
+
+
+def test_a_negative_first_seed_is_one_line_and_exit_2(tmp_path, capsys):
+    with pytest.raises(SystemExit) as stop:
+        B.main(["--real", str(tmp_path), "--sim-seeds", "-1"])
+    assert stop.value.code == 2
+    assert "--sim-seeds" in capsys.readouterr().err
+
+
 def test_single_frames_are_every_room_type_seen_once_per_seed():
     frames = B.frames_set([f"type{k}" for k in range(9)])
     assert len(frames) == 63 and {s.variant for s in frames} == {"frame"}
@@ -468,7 +491,9 @@ def test_named_stability_scans_come_from_the_simulated_set_not_the_frames(tmp_pa
         (tmp_path / name).mkdir()
         key = {"key": {"scans": [s.name for s in listed]}}
         (tmp_path / name / "manifest.json").write_text(json.dumps(key))
-    args = argparse.Namespace(stability_scans="office-s4-fused", sim_set=None, out=tmp_path)
+    args = argparse.Namespace(
+        stability_scans="office-s4-fused", sim_set=None, out=tmp_path, sim_seeds=0
+    )
     [picked] = B._named_scans(args, [], source)
     assert picked.path == str(tmp_path / "sim-parametric-bbb" / "office-s4-fused")
 
