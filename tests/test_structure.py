@@ -19,7 +19,7 @@ PACKAGE = SRC / "ontodetect"
 #: In-function imports of our own modules in files outside this part of the redesign,
 #: waiting for their owners (file, imported module): each should move to the top of its
 #: file or get a ``# lazy: <reason>`` comment.
-PENDING_LAZY: set[tuple[str, str]] = {}
+PENDING_LAZY: set[tuple[str, str]] = set()
 #: Imports of the root package ``ontodetect`` (the facade) from inside it, waiting for
 #: their owners to import ``ontodetect._version`` instead: (file, names).
 PENDING_ROOT: set[tuple[str, str]] = set()
