@@ -260,9 +260,10 @@ def _across(desc: Any, i: int, j: int) -> float:
     if axes is None or float(a.length) < _LONG * float(a.width):
         return math.nan  # no long axis to speak of (one cushion of a sofa), or none given
     long = np.asarray(axes, dtype=float)[0][:2]
-    normal = np.asarray(b.normal, dtype=float)[:2]
-    if float(np.hypot(*long)) < 1e-9 or float(np.hypot(*normal)) < 1e-9:
+    facing = _facing(b)
+    if facing is None or float(np.hypot(*long)) < 1e-9:
         return 0.0
+    normal, _ = facing
     run = np.array([-normal[1], normal[0]])
     cos = abs(float(long @ run)) / (float(np.hypot(*long)) * float(np.hypot(*run)))
     return math.degrees(math.acos(min(1.0, cos)))
@@ -281,10 +282,10 @@ def _span(desc: Any, i: int, j: int) -> float:
     a, b = pair
     if getattr(a, "axes", None) is None or getattr(b, "axes", None) is None:
         return math.nan
-    normal = np.asarray(b.normal, dtype=float)[:2]
-    size = float(np.hypot(*normal))
-    if size < 1e-9:
+    facing = _facing(b)
+    if facing is None:
         return math.nan
+    normal, size = facing
     run = np.array([-normal[1], normal[0], 0.0]) / size
 
     def extent(plane: Any) -> float:
