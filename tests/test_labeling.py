@@ -10,7 +10,13 @@ from hypothesis import strategies as st
 
 from ontodetect.errors import InvalidParameterError
 from ontodetect.labeling import energy, label_clusters, label_costs, label_fit
-from ontodetect.ontology import ClusterScores, Gaussian, LabelModel, builtin_ontology
+from ontodetect.ontology import (
+    ClassScore,
+    ClusterScores,
+    Gaussian,
+    LabelModel,
+    builtin_ontology,
+)
 
 
 def scores(**probs):
@@ -159,3 +165,46 @@ def test_context_tips_an_ambiguous_seat_towards_chair_near_a_table():
 def test_bad_parameters(kwargs, name):
     with pytest.raises(InvalidParameterError, match=f"'{name}'"):
         label_clusters([scores(chair=0.5)], [[plane(0.4, 0.4)]], builtin_ontology(), **kwargs)
+
+
+def _with_priors(s, **priors):
+    """``s`` with a class score per class named, holding only its room prior P_obj."""
+    classes = {k: ClassScore(k, 0.0, math.log(p), {}, {}, ()) for k, p in priors.items()}
+    return ClusterScores(classes=classes, probabilities=s.probabilities, best=s.best)
+
+
+@pytest.mark.parametrize(
+    ("other", "length", "room_favours", "explains"),
+    [
+        ("sink", 0.3, True, True),
+        ("toilet", 0.6, True, True),
+        ("sink", 0.3, False, False),
+        ("toilet", 0.6, False, False),
+        ("stool", 0.6, True, False),
+    ],
+)
+def test_a_likelier_competitor_explains_a_chair_away_where_the_room_favours_it(
+    other, length, room_favours, explains
+):
+    """Eq. 3.7's plane-size term gives each of these clusters to the chair, though the
+    ontology finds the competitor likelier (0.4 against 0.3). With ``explain_away`` a sink
+    or a WC takes the cluster (no reported label) in a room whose prior makes it likelier
+    than a chair (a bathroom: 1 against 0.3), not where both are as likely (1 and 1); a
+    stool never does, since a chair whose backrest the scan lost reads as one."""
+    o = builtin_ontology()
+    priors = {"chair": 0.3 if room_favours else 1.0, other: 1.0}
+    s = _with_priors(scores(chair=0.3, **{other: 0.4}), **priors)
+    seat = [plane(length, 0.4)]
+    (default,) = label_clusters([s], [seat], o)
+    assert default.label == "chair"
+    (choice,) = label_clusters([s], [seat], o, explain_away=True)
+    if explains:
+        assert choice.label is None and choice.reason.endswith("(not reported)")
+        assert o[choice.extra["class"]].label == o[other].label
+    else:
+        assert choice == default
+    # Reporting every class (--classes all) changes what a win yields, not who wins: the
+    # competitor that explained the chair away is reported, and a chair stays a chair.
+    (every,) = label_clusters([s], [seat], o.reporting("all"), explain_away=True)
+    assert every.extra["class"] == choice.extra["class"]
+    assert every.label == o[choice.extra["class"]].label

@@ -500,6 +500,16 @@ class DetectConfig(_Section):
         0.05, Interval(0.0, 1.0, "right"), "Likelihood of a cluster under 'none of the classes'."
     )
     context: float = _param(0.0, NON_NEGATIVE, "Strength of the seat-near-table pairwise term.")
+    # Eq. 3.7's plane-size term can give a cluster to a chair that the ontology finds likelier
+    # to be a sink, in a room read as a bathroom: the competing class is there to explain
+    # such a cluster away (thesis Tables 4.14-4.16: a chair in an unlikely room costs more).
+    explain_away: bool = _param(
+        True,
+        Boolean(),
+        "A cluster whose likeliest label is one not reported (a sink, a WC), in a room whose "
+        "prior favours it over the label's class, gets no reported label of another kind "
+        "(a stool never bars a chair: both are seating).",
+    )
     # One pass decides on one voxel grid: which voxels the points fall in moves planes and
     # clusters enough to make or break a detection. A majority of passes over the scan
     # turned by a fraction of a degree keeps what does not depend on the grid.

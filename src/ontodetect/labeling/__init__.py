@@ -9,6 +9,7 @@
 from ._energy import (
     LabelChoice,
     energy,
+    explained_away,
     label_clusters,
     label_costs,
     label_fit,
@@ -21,6 +22,7 @@ __all__ = [
     "LabelChoice",
     "conflicts",
     "energy",
+    "explained_away",
     "label_clusters",
     "label_costs",
     "label_fit",

@@ -276,6 +276,16 @@ class ObjectClass:
     #: a label and a cluster takes the better of the two descriptions, so that a thing
     #: described twice is not made likelier (``ontology.score_cluster``); ``None``: none.
     variant_of: str | None = None
+    #: Whether the class was written to compete (``detect: false`` in its file) rather than
+    #: be reported; :meth:`Ontology.reporting` keeps it when it reports more. ``None``: as
+    #: ``not detect``. A competing class may explain a cluster away (``labeling``).
+    written_competing: bool | None = None
+
+    @property
+    def competing(self) -> bool:
+        """The class was written to compete for clusters, not to be reported (``detect:
+        false`` in its file), whatever :meth:`Ontology.reporting` reports now."""
+        return (not self.detect) if self.written_competing is None else self.written_competing
 
     def part(self, name: str) -> Part:
         for p in self.parts:
@@ -409,7 +419,11 @@ class Ontology:
                     ",".join(unknown),
                 )  # fmt: skip
         out = tuple(
-            dataclasses.replace(c, detect=wanted is None or c.name in wanted or c.label in wanted)
+            dataclasses.replace(
+                c,
+                detect=wanted is None or c.name in wanted or c.label in wanted,
+                written_competing=c.competing,
+            )
             for c in self.classes
         )
         return Ontology(out, self.source, self.seeds)

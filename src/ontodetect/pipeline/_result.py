@@ -298,6 +298,7 @@ def label_and_detect(
         threshold=settings.threshold,
         centers=centers,
         context=settings.context,
+        explain_away=settings.explain_away,
     )
     detections = [
         _detection(
