@@ -201,6 +201,9 @@ def test_a_likelier_competitor_explains_a_chair_away_where_the_room_favours_it(
     if explains:
         assert choice.label is None and choice.reason.endswith("(not reported)")
         assert o[choice.extra["class"]].label == o[other].label
+        # --explain says what was barred and by what.
+        assert choice.extra["explained_away"] == ["chair"]
+        assert choice.extra["explained_by"] == o[other].label
     else:
         assert choice == default
     # Reporting every class (--classes all) changes what a win yields, not who wins: the

@@ -464,6 +464,8 @@ def explain(
                 "label": choice.label,
                 "class": chosen,
                 "reason": choice.reason,
+                "explained_away": list(choice.extra.get("explained_away", [])),
+                "explained_by": choice.extra.get("explained_by"),
                 "costs": dict(choice.costs),
                 "classes": classes,
             }

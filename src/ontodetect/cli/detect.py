@@ -530,6 +530,11 @@ def _print_explain(rows) -> None:
             f" -> {row['label'] or 'no label'}" + (f" ({row['reason']})" if row["reason"] else "")
         )
         console.print(Text(head, style="bold"))
+        if row.get("explained_away"):
+            console.print(
+                f"  explained away: {', '.join(row['explained_away'])}, by a likelier"
+                f" {row['explained_by']} in a room whose prior favours it"
+            )
         for b in row.get("passes", []):
             console.print("  " + _ballot_line(b))
         for o in row.get("beat", []):

@@ -281,7 +281,9 @@ def label_clusters(
     costs = [_costs(by, pl, ontology, beta, gamma) for by, pl in zip(labels, planes)]
     options: list[list[str | None]] = []
     nothing: list[bool] = []
+    barred: list[list[str]] = []
     for s, c, by_label in zip(scores, costs, labels):
+        barred.append([])
         # Algorithm 1: the cluster is kept when its best label passes the threshold; and a
         # cluster that "none of the classes" explains better than any label is not an object.
         nothing.append(s.probabilities.get(NONE, 0.0) > max(by_label.values(), default=0.0))
@@ -290,7 +292,8 @@ def label_clusters(
             continue
         allowed = [k for k in c if by_label[ontology[k].label] >= threshold]
         if explain_away:
-            allowed = [k for k in allowed if not explained_away(s, by_label, ontology, k)]
+            barred[-1] = [k for k in allowed if explained_away(s, by_label, ontology, k)]
+            allowed = [k for k in allowed if k not in barred[-1]]
         allowed.sort(key=lambda k: (c[k], k))
         options.append([*allowed, None] if allowed else [None])
 
@@ -370,14 +373,24 @@ def label_clusters(
 
     out = []
     for i, label in enumerate(chosen):
+        # The labels a competitor explained away, and the competitor (its label), for
+        # --explain.
+        away: dict[str, Any] = {}
+        if barred[i]:
+            by = labels[i]
+            away = {
+                "explained_away": sorted({ontology[k].label for k in barred[i]}),
+                "explained_by": max(by, key=lambda k: (by[k], k)),
+            }
         if label is None:
             reason = "below threshold" if options[i] == [None] else "excluded by an overlap"
             if nothing[i]:
                 reason = "none of the classes"
-            out.append(LabelChoice(None, costs[i], reason))
+            out.append(LabelChoice(None, costs[i], reason, dict(away)))
             continue
         if not ontology[label].detect:
-            out.append(LabelChoice(None, costs[i], f"{label} (not reported)", {"class": label}))
+            reason = f"{label} (not reported)"
+            out.append(LabelChoice(None, costs[i], reason, {"class": label, **away}))
             continue
-        out.append(LabelChoice(ontology[label].label, costs[i], "", {"class": label}))
+        out.append(LabelChoice(ontology[label].label, costs[i], "", {"class": label, **away}))
     return out
