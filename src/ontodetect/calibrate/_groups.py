@@ -106,6 +106,7 @@ def _detect_counts(
         threshold=params["threshold"],
         centers=scene.centers,
         context=params["context"],
+        explain_away=params["explain_away"],
     )
     preds = [
         Instance.make(
@@ -134,7 +135,8 @@ def _detection_params(ontology: Any, detect_options: Mapping[str, Any]) -> dict[
 
     opts = dict(detect_options)
     d = (opts.get("config") or Config()).detect
-    params = {k: getattr(d, k) for k in ("threshold", "beta", "none_likelihood", "context")}
+    keys = ("threshold", "beta", "none_likelihood", "context", "explain_away")
+    params = {k: getattr(d, k) for k in keys}
     params["priors"] = class_priors(ontology, opts.get("room"), opts.get("indoor"))
     return params
 
