@@ -220,17 +220,26 @@ def explained_away(
     >>> explained_away(bathroom, {"chair": 0.2, "stool": 0.4}, onto, "chair")
     False
     """
-    cls = ontology[name]
-    if cls.competing:
-        return False
+    explainer = _explainer(by_label, ontology)
+    return explainer is not None and _bars(scores, ontology, explainer, name)
+
+
+def _explainer(by_label: Mapping[str, float], ontology: Ontology) -> str | None:
+    """The cluster's likeliest label when it is one of the competing classes', else None."""
     best = max(by_label, key=lambda k: (by_label[k], k), default=None)
-    if best is None or best == cls.label:
+    if best is None or not all(c.competing for c in ontology.classes if c.label == best):
+        return None
+    return best
+
+
+def _bars(scores: ClusterScores, ontology: Ontology, explainer: str, name: str) -> bool:
+    """Whether the competing label ``explainer`` bars class ``name`` (:func:`explained_away`)."""
+    cls = ontology[name]
+    if cls.competing or cls.label == explainer:
         return False
-    if not all(c.competing for c in ontology.classes if c.label == best):
+    if _kinds(ontology, explainer) & _kinds(ontology, cls.label):
         return False
-    if _kinds(ontology, best) & _kinds(ontology, cls.label):
-        return False
-    return _label_prior(scores, ontology, best) > _label_prior(scores, ontology, cls.label)
+    return _label_prior(scores, ontology, explainer) > _label_prior(scores, ontology, cls.label)
 
 
 def label_clusters(
@@ -282,8 +291,10 @@ def label_clusters(
     options: list[list[str | None]] = []
     nothing: list[bool] = []
     barred: list[list[str]] = []
+    explainers: list[str | None] = []
     for s, c, by_label in zip(scores, costs, labels):
         barred.append([])
+        explainers.append(_explainer(by_label, ontology) if explain_away else None)
         # Algorithm 1: the cluster is kept when its best label passes the threshold; and a
         # cluster that "none of the classes" explains better than any label is not an object.
         nothing.append(s.probabilities.get(NONE, 0.0) > max(by_label.values(), default=0.0))
@@ -291,8 +302,8 @@ def label_clusters(
             options.append([None])
             continue
         allowed = [k for k in c if by_label[ontology[k].label] >= threshold]
-        if explain_away:
-            barred[-1] = [k for k in allowed if explained_away(s, by_label, ontology, k)]
+        if explainers[-1] is not None:
+            barred[-1] = [k for k in allowed if _bars(s, ontology, explainers[-1], k)]
             allowed = [k for k in allowed if k not in barred[-1]]
         allowed.sort(key=lambda k: (c[k], k))
         options.append([*allowed, None] if allowed else [None])
@@ -377,16 +388,15 @@ def label_clusters(
         # --explain.
         away: dict[str, Any] = {}
         if barred[i]:
-            by = labels[i]
             away = {
                 "explained_away": sorted({ontology[k].label for k in barred[i]}),
-                "explained_by": max(by, key=lambda k: (by[k], k)),
+                "explained_by": explainers[i],
             }
         if label is None:
             reason = "below threshold" if options[i] == [None] else "excluded by an overlap"
             if nothing[i]:
                 reason = "none of the classes"
-            out.append(LabelChoice(None, costs[i], reason, dict(away)))
+            out.append(LabelChoice(None, costs[i], reason, away))
             continue
         if not ontology[label].detect:
             reason = f"{label} (not reported)"
